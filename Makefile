@@ -1,0 +1,57 @@
+# handbench: two commands do all set-up on a fresh machine.
+#   make serve   -> creates .venv if missing, installs, runs the design explorer
+#   make test    -> creates .venv if missing, installs test extras (+ Debian chromium as root),
+#                   then lint, format check, type check, all tests (browser tests included)
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed-stamp
+CHROMIUM := /usr/bin/chromium
+HOST ?= 127.0.0.1
+PORT ?= 8080
+
+.PHONY: serve test lint typecheck pytest chromium setup sweep bench clean
+
+$(STAMP): pyproject.toml
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -e '.[test]'
+	@touch $(STAMP)
+
+setup: $(STAMP)
+
+chromium:
+	@if [ -x $(CHROMIUM) ]; then :; \
+	elif [ "$$(id -u)" = "0" ]; then \
+	  echo "installing Debian chromium for the browser tests"; \
+	  (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null) \
+	    || { echo "could not install chromium with apt-get"; exit 1; }; \
+	else \
+	  echo "browser tests need Debian's chromium at $(CHROMIUM): run 'sudo apt-get install chromium'"; \
+	  echo "(without it the browser tests are skipped with this message)"; \
+	fi
+
+serve: $(STAMP)
+	$(VENV)/bin/handbench serve --host $(HOST) --port $(PORT)
+
+lint: $(STAMP)
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/ruff format --check .
+
+typecheck: $(STAMP)
+	$(VENV)/bin/pyright
+
+pytest: $(STAMP) chromium
+	$(PY) -m pytest -q
+
+test: lint typecheck pytest
+
+sweep: $(STAMP)
+	$(VENV)/bin/handbench sweep --out out/sweep
+
+bench: $(STAMP)
+	$(PY) benchmarks/bench_hand_rebuild.py
+
+clean:
+	rm -rf build out .pytest_cache .ruff_cache
