@@ -1,0 +1,310 @@
+"""The ``handbench`` command line. Every flag for a design or a setting is generated from
+the typed dataclasses (``ThumbDesign``, ``SimSettings``) and their field docstrings."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any, get_args, get_origin, get_type_hints
+
+from app.config_docs import field_docs
+from app.design import CMC_GRID_DEG, MCP_GRID_DEG, ThumbDesign
+from app.errors import HandbenchError, SettingsError
+
+
+# ----------------------------------------------------------------------------- flag builders
+def _add_dataclass_flags(parser: argparse.ArgumentParser, cls: type, group: str) -> None:
+    docs = field_docs(cls)
+    hints = get_type_hints(cls)
+    g = parser.add_argument_group(group)
+    for f in dataclasses.fields(cls):
+        t = hints[f.name]
+        flag = "--" + f.name.replace("_", "-")
+        default = f.default if f.default is not dataclasses.MISSING else None
+        helptext = f"{docs.get(f.name, '')} (default: {default})"
+        if get_origin(t) is tuple:
+            g.add_argument(flag, dest=f"{group}.{f.name}", type=float, nargs=len(get_args(t)),
+                           default=None, help=helptext)
+        elif get_args(t) and all(isinstance(a, str) for a in get_args(t)):  # Literal
+            g.add_argument(flag, dest=f"{group}.{f.name}", choices=get_args(t), default=None,
+                           help=helptext)
+        else:
+            g.add_argument(flag, dest=f"{group}.{f.name}", type=t if t in (int, float) else str,
+                           default=None, help=helptext)
+
+
+def add_settings_flags(parser: argparse.ArgumentParser) -> None:
+    """Flags for every field of ``SimSettings`` (closing, contact, fc, grasp_type)."""
+    from app.settings import SimSettings
+
+    for f in dataclasses.fields(SimSettings):
+        _add_dataclass_flags(parser, get_type_hints(SimSettings)[f.name], f.name)
+
+
+def settings_from_args(args: argparse.Namespace) -> Any:
+    """Build ``SimSettings`` from parsed flags (unset flags keep their defaults)."""
+    from app.settings import SimSettings
+
+    parts: dict[str, Any] = {}
+    for f in dataclasses.fields(SimSettings):
+        cls = get_type_hints(SimSettings)[f.name]
+        kw = {}
+        for sf in dataclasses.fields(cls):
+            v = getattr(args, f"{f.name}.{sf.name}", None)
+            if v is not None:
+                kw[sf.name] = tuple(v) if isinstance(v, list) else v
+        parts[f.name] = cls(**kw)
+    return SimSettings(**parts)
+
+
+def add_design_flags(parser: argparse.ArgumentParser, required: bool = True) -> None:
+    """--cmc, --mcp (degrees) and --cmc-tilt from ``ThumbDesign``."""
+    docs = field_docs(ThumbDesign)
+    parser.add_argument("--cmc", type=float, required=required, metavar="DEG",
+                        help=docs["cmc_deg"] + " Range 0-45.")
+    parser.add_argument("--mcp", type=float, required=required, metavar="DEG",
+                        help=docs["mcp_deg"] + " Range 0-90.")
+    parser.add_argument("--cmc-tilt", choices=("ulnar", "radial"), default="ulnar",
+                        help=docs["cmc_tilt"])
+
+
+def parse_angle_list(text: str, name: str) -> list[float]:
+    """'0,15,30' or a range with a step 'start:stop:step' (stop included) -> degrees."""
+    try:
+        if ":" in text:
+            a, b, s = (float(x) for x in text.split(":"))
+            if s <= 0 or b < a:
+                raise ValueError
+            n = int(round((b - a) / s))
+            vals = [a + k * s for k in range(n + 1) if a + k * s <= b + 1e-9]
+        else:
+            vals = [float(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise SettingsError(
+            f"--{name} takes a comma list ('0,15,30') or start:stop:step ('0:45:5'), got {text!r}"
+        ) from None
+    if not vals:
+        raise SettingsError(f"--{name} is empty")
+    return vals
+
+
+def _objects_arg(names: list[str] | None) -> list[str]:
+    from app.objects import OBJECT_KEYS, load_object
+
+    if not names:
+        return list(OBJECT_KEYS)
+    for n in names:
+        load_object(n)  # UnknownObjectError lists the valid keys
+    return names
+
+
+def _store(args: argparse.Namespace):  # noqa: ANN202
+    from app.store import ResultStore, default_store_path
+
+    return ResultStore(Path(args.store) if args.store else default_store_path())
+
+
+# ----------------------------------------------------------------------------- commands
+def cmd_serve(args: argparse.Namespace) -> int:
+    from app.explorer.server import serve
+
+    serve(host=args.host, port=args.port, store_path=args.store)
+    return 0
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    from app.render import render_hand, render_object
+
+    design = ThumbDesign(args.cmc, args.mcp, args.cmc_tilt)
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    if args.object:
+        _objects_arg([args.object])
+        render_object(out, args.object, cmc_deg=design.cmc_deg, mcp_deg=design.mcp_deg)
+    else:
+        render_hand(out, design.cmc_deg, design.mcp_deg)
+    print(f"wrote {out}")
+    return 0
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    from app.sweep import make_executor, run_sweep
+
+    design = ThumbDesign(args.cmc, args.mcp, args.cmc_tilt)
+    names = _objects_arg(args.object)
+    settings = settings_from_args(args)
+    with _store(args) as store:
+        ex = make_executor(args.executor, args.workers, args.address)
+        try:
+            res = run_sweep([design], names, settings=settings, store=store, executor=ex,
+                            progress=not args.json and sys.stderr.isatty())
+        finally:
+            ex.close()
+    assert res is not None
+    score = res.scores[0]
+    doc = score.to_json_dict(design.cmc_deg, design.mcp_deg, settings.as_dict())
+    if args.json:
+        print(json.dumps(doc, indent=2))
+        return 0
+    print(f"design CMC {design.cmc_deg:g}°, MCP {design.mcp_deg:g}°"
+          f"  ({res.computed} grasps simulated, {res.seconds:.1f} s)")
+    print(f"{'object':<14}{'N_GH':>6}{'FC %':>8}{'C %':>8}{'S_GAS %':>9}")
+    for key, o in doc["objects"].items():
+        print(f"{key:<14}{o['n_gh']:>6}{o['fc_pct']:>8.1f}{o['c_pct']:>8.1f}{o['sgas_pct']:>9.1f}")
+    for k in ("pp_sgas_pct", "cg_sgas_pct", "total_sgas_pct"):
+        v = doc[k]
+        print(f"{k:<28}{'-' if v is None else f'{v:.1f}':>8}")
+    return 0
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from app.design import ThumbDesign as D
+    from app.objects import load_object
+    from app.plots import plot_bars, plot_contour, plot_lines
+    from app.report import write_table_csv, write_table_md
+    from app.sweep import cached_hypotheses, make_executor, run_sweep
+
+    cmcs = parse_angle_list(args.cmc, "cmc") if args.cmc else list(CMC_GRID_DEG)
+    mcps = parse_angle_list(args.mcp, "mcp") if args.mcp else list(MCP_GRID_DEG)
+    designs = [D(c, m) for c in cmcs for m in mcps]
+    names = _objects_arg(args.object)
+    settings = settings_from_args(args)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    with _store(args) as store:
+        ex = make_executor(args.executor, args.workers, args.address)
+        try:
+            res = run_sweep(designs, names, settings=settings, store=store, executor=ex,
+                            chunk=args.chunk)
+        finally:
+            ex.close()
+    assert res is not None
+    rows = [s.to_row(d.cmc_deg, d.mcp_deg) for d, s in zip(res.designs, res.scores, strict=True)]
+    names_disp = {k: load_object(k).spec.name for k in names}
+    types = {k: load_object(k).spec.grasp_type for k in names}
+    n_gh = {k: len(cached_hypotheses(k)) for k in names}
+    write_table_csv(rows, out / "table.csv", object_keys=names)
+    write_table_md(rows, out / "table.md", names_disp, types, n_gh)
+    plot_lines(rows, out / "lines.png")
+    plot_contour(rows, out / "contour.png")
+    plot_bars(rows, out / "bars.png", names_disp, n_gh)
+    (out / "settings.json").write_text(json.dumps(settings.as_dict(), indent=2))
+    best = max(rows, key=lambda r: r["total_sgas_pct"])
+    print(f"{len(designs)} designs x {len(names)} objects: {res.computed} grasps simulated in "
+          f"{time.perf_counter() - t0:.1f} s")
+    print(f"best design: CMC {best['cmc_deg']:g}°, MCP {best['mcp_deg']:g}° "
+          f"(total S_GAS {best['total_sgas_pct']:.1f} %)")
+    print(f"wrote {out}/table.csv, table.md, lines.png, contour.png, bars.png")
+    return 0
+
+
+def cmd_objects(args: argparse.Namespace) -> int:
+    from app.objects import OBJECT_KEYS, import_object, load_object
+
+    if args.objects_cmd == "import":
+        obj = import_object(args.path, like=args.like, units=args.units, key=args.key,
+                            save_to=args.save_to)
+        b = obj.mesh.bounds
+        print(f"imported {obj.spec.key} ({args.path}) like {args.like}: "
+              f"{len(obj.mesh.faces)} faces, size {(b[1] - b[0]).round(1).tolist()} mm")
+        return 0
+    for k in OBJECT_KEYS:
+        o = load_object(k)
+        b = o.mesh.bounds
+        print(f"{k:<14} {o.spec.grasp_type}  N_GH {o.spec.setup.n_gh:>5}  "
+              f"size {(b[1] - b[0]).round(1).tolist()} mm  {o.spec.name}")
+    return 0
+
+
+def cmd_screenshot(args: argparse.Namespace) -> int:
+    from app.explorer.screenshot import screenshot_cli
+
+    return screenshot_cli(args)
+
+
+# ----------------------------------------------------------------------------- parser
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="handbench",
+        description="Design explorer and simulation benchmark for anthropomorphic hands.",
+    )
+    sub = p.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
+
+    s = sub.add_parser("serve", help="run the design explorer (web UI)")
+    s.add_argument("--host", default="127.0.0.1", help="interface to listen on (0.0.0.0: LAN)")
+    s.add_argument("--port", type=int, default=8080, help="port (0: any free port)")
+    s.add_argument("--store", help="results database (default ~/.cache/handbench/results.sqlite)")
+    s.set_defaults(func=cmd_serve)
+
+    s = sub.add_parser("render", help="off-screen picture of the hand (and an object)")
+    add_design_flags(s)
+    s.add_argument("--object", help="object key: show it with the hand at roll 0")
+    s.add_argument("--out", required=True, help="PNG file to write")
+    s.set_defaults(func=cmd_render)
+
+    for name, helptext, func in (
+        ("evaluate", "FC %, C %, S_GAS % of one design", cmd_evaluate),
+        ("sweep", "run many designs; write table.csv/md and plots", cmd_sweep),
+    ):
+        s = sub.add_parser(name, help=helptext)
+        if name == "evaluate":
+            add_design_flags(s)
+            s.add_argument("--json", action="store_true", help="print JSON")
+        else:
+            s.add_argument("--cmc", help="CMC angles: '0,15,30,45' or '0:45:5' (default grid)")
+            s.add_argument("--mcp", help="MCP angles: '0,15,...,90' or '0:90:5' (default grid)")
+            s.add_argument("--out", default="out/sweep", help="output folder")
+            s.add_argument("--chunk", type=int, default=60, help="hypotheses per task")
+        s.add_argument("--object", nargs="+", help="object keys (default: all six)")
+        s.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
+        s.add_argument("--executor", choices=("local", "inline", "ray"), default="local",
+                       help="local process pool (default), inline, or a Ray cluster")
+        s.add_argument("--address", help="Ray cluster address (with --executor ray)")
+        s.add_argument("--store", help="results database (default ~/.cache/handbench/results.sqlite)")
+        add_settings_flags(s)
+        s.set_defaults(func=func)
+
+    s = sub.add_parser("objects", help="list objects or import a mesh")
+    osub = s.add_subparsers(dest="objects_cmd", required=True, metavar="ACTION")
+    osub.add_parser("list", help="the shipped objects")
+    imp = osub.add_parser("import", help="import an STL/OBJ/PLY mesh")
+    imp.add_argument("path")
+    imp.add_argument("--like", required=True, help="take the grasp set-up of this object")
+    imp.add_argument("--units", choices=("mm", "m"), default="mm", help="units of the file")
+    imp.add_argument("--key", help="key for the imported object (default: file name)")
+    imp.add_argument("--save-to", help="folder to save it in (use with HANDBENCH_USER_OBJECTS)")
+    s.set_defaults(func=cmd_objects)
+
+    s = sub.add_parser("screenshot", help="headless browser screenshot of the explorer")
+    add_design_flags(s)
+    s.add_argument("--object", default="chips_can")
+    s.add_argument("--gh", help="grasp hypothesis id or index to replay")
+    s.add_argument("--out", required=True)
+    s.add_argument("--size", default="1400x900", help="WxH pixels")
+    s.add_argument("--view", default="scene", choices=("scene", "map"),
+                   help="what to capture: the 3-D scene or the design map tab")
+    s.add_argument("--store", help="results database")
+    s.set_defaults(func=cmd_screenshot)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except HandbenchError as e:
+        print(f"handbench: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("handbench: interrupted (finished results are kept in the store)", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

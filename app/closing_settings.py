@@ -1,0 +1,50 @@
+"""Settings of the collision-driven closing (METHOD §4). One source for CLI and GUI."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Literal
+
+from app.errors import SettingsError
+
+ClosingMode = Literal["sequential", "independent_thumb", "coupled_tendon"]
+CLOSING_MODES: tuple[str, ...] = ("sequential", "independent_thumb", "coupled_tendon")
+
+
+@dataclass(frozen=True)
+class ClosingSettings:
+    """How the hand approaches and closes. Lengths mm."""
+
+    mode: ClosingMode = "sequential"
+    """'sequential' (published, OpenRAVE-style), 'independent_thumb' (CMC and MCP close
+    together at ``thumb_rates``), or 'coupled_tendon' (a finger's joints close together at
+    ``tendon_ratios``)."""
+    stop_tol_mm: float = 0.5
+    """A closing joint stops once a moving link is this close to the object (final gap in
+    (0, stop_tol_mm]); final angles do not depend on any step size beyond it."""
+    thumb_rates: tuple[float, float] = (1.0, 1.0)
+    """Independent-thumb mode: relative closing rates of CMC and MCP."""
+    tendon_ratios: tuple[float, float, float] = (1.0, 1.0, 0.8)
+    """Coupled-tendon mode: relative closing rates of a finger's three joints."""
+    max_steps: int = 400
+    """Cap on conservative-advancement steps per closing stage (a stage that hits it stops
+    where it is and is counted in the statistics)."""
+    approach_clearance_mm: float = 250.0
+    """The approach starts this far beyond the object's bounding sphere."""
+
+    def __post_init__(self) -> None:
+        if self.mode not in CLOSING_MODES:
+            raise SettingsError(f"closing mode {self.mode!r} unknown; choose one of {CLOSING_MODES}")
+        if not (0 < self.stop_tol_mm <= 5):
+            raise SettingsError(f"stop_tol_mm must be in (0, 5] mm, got {self.stop_tol_mm}")
+        for name in ("thumb_rates", "tendon_ratios"):
+            v = getattr(self, name)
+            if not all(math.isfinite(x) and x >= 0 for x in v) or max(v) <= 0:
+                raise SettingsError(f"{name} must be non-negative with one positive, got {v}")
+        if self.max_steps < 10:
+            raise SettingsError(f"max_steps must be >= 10, got {self.max_steps}")
+
+    def as_dict(self) -> dict[str, object]:
+        """Plain dict (for hashing and JSON)."""
+        return asdict(self)

@@ -1,0 +1,152 @@
+"""Contact patches after closing (METHOD §5).
+
+A link is in contact when its FCL distance to the object is within ``contact_tol_mm``.
+Its patch: points sampled on the link surface (about 1 mm apart) whose signed distance
+to the object is within the tolerance; thinned to at most ``max_points_per_link`` by
+farthest-point sampling, which keeps the patch's extent (what resists torsion about the
+line between two fingers). n_contact = minus the object's outward normal at the point, i.e.
+from the link toward the object. Palmar: angle(n_contact, link n_palmar) < threshold.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import fcl
+import numpy as np
+
+from app.closing import fcl_transform, pair_nearest
+from app.contact_set import ContactSet
+from app.hand.geometry import Shape
+
+
+@dataclass(frozen=True)
+class ContactSettings:
+    """How contacts are extracted and classified."""
+
+    contact_tol_mm: float = 1.0
+    """A link (and a surface point) within this distance of the object touches it."""
+    max_points_per_link: int = 6
+    """Cap on points per contact patch (farthest-point sampling keeps its extent)."""
+    sample_spacing_mm: float = 1.0
+    """Spacing of the link-surface sample points."""
+
+    def __post_init__(self) -> None:
+        from app.errors import SettingsError
+
+        if not 0 < self.contact_tol_mm <= 10:
+            raise SettingsError(f"contact_tol_mm must be in (0, 10] mm, got {self.contact_tol_mm}")
+        if self.max_points_per_link < 1:
+            raise SettingsError(f"max_points_per_link must be >= 1, got {self.max_points_per_link}")
+        if not 0.2 <= self.sample_spacing_mm <= 5:
+            raise SettingsError(f"sample_spacing_mm must be in [0.2, 5], got {self.sample_spacing_mm}")
+
+
+@lru_cache(maxsize=512)
+def _samples(shape: Shape, spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    return shape.surface_points(spacing)
+
+
+def farthest_points(p: np.ndarray, m: int) -> np.ndarray:
+    """Indices of up to ``m`` points of ``p`` (K, 3) spread by farthest-point sampling."""
+    if len(p) <= m:
+        return np.arange(len(p))
+    centre = p.mean(0)
+    idx = [int(np.argmax(((p - centre) ** 2).sum(1)))]
+    d = ((p - p[idx[0]]) ** 2).sum(1)
+    for _ in range(m - 1):
+        i = int(np.argmax(d))
+        idx.append(i)
+        d = np.minimum(d, ((p - p[i]) ** 2).sum(1))
+    return np.array(idx)
+
+
+def link_patch(
+    obj: object,
+    shape: Shape,
+    T_object_link: np.ndarray,
+    nearest_on_link: np.ndarray,
+    settings: ContactSettings,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Patch points (K, 3) and contact normals (K, 3) of one touching link, object frame."""
+    p_link, _ = _samples(shape, settings.sample_spacing_mm)
+    R, t = T_object_link[:3, :3], T_object_link[:3, 3]
+    p = p_link @ R.T + t
+    near = ((p - nearest_on_link) ** 2).sum(1) < (30.0**2)  # cheap pre-filter
+    p = p[near]
+    sd = obj.sdf(p) if len(p) else np.zeros(0)  # type: ignore[attr-defined]
+    p = p[sd <= settings.contact_tol_mm]
+    if len(p) == 0:  # sampling missed a grazing contact: keep FCL's nearest point
+        p = nearest_on_link[None, :]
+    p = p[farthest_points(p, settings.max_points_per_link)]
+    n_out = obj.normal(p)  # type: ignore[attr-defined]
+    return p, -n_out
+
+
+def contacts_of_links(
+    obj: object,
+    names: list[str],
+    shapes: list[Shape],
+    bodies: list[fcl.CollisionObject],
+    T_object_links: np.ndarray,
+    T_link_fcl: np.ndarray,
+    settings: ContactSettings,
+    palmar_angle_deg: float,
+    counter: list[int] | None = None,
+) -> ContactSet:
+    """Contacts of the given links (poses (L, 4, 4) in the object frame) with the object."""
+    pieces = obj.collision_objects()  # type: ignore[attr-defined]
+    centroid = obj.centroid_object  # type: ignore[attr-defined]
+    r_obj = obj.max_radius  # type: ignore[attr-defined]
+    P, N, L, Pal = [], [], [], []
+    for name, shape, body, T, Tf in zip(names, shapes, bodies, T_object_links, T_link_fcl,
+                                        strict=True):
+        Tb = T @ Tf
+        # bounding-sphere cull: link reach from its FCL frame centre
+        reach = _reach(shape)
+        if np.linalg.norm(Tb[:3, 3] - centroid) > r_obj + reach + settings.contact_tol_mm:
+            continue
+        body.setTransform(fcl_transform(Tb))
+        best = (np.inf, None)
+        for piece in pieces:
+            d, pa, _ = pair_nearest(body, piece)
+            if counter is not None:
+                counter[0] += 1
+            if d < best[0]:
+                best = (d, pa)
+        if best[0] > settings.contact_tol_mm or best[1] is None:
+            continue
+        p, n = link_patch(obj, shape, T, best[1], settings)
+        n_palmar = T[:3, 2]
+        cos_lim = np.cos(np.deg2rad(palmar_angle_deg))
+        P.append(p)
+        N.append(n)
+        L.append(np.full(len(p), name, dtype=object))
+        Pal.append(n @ n_palmar > cos_lim)
+    if not P:
+        return ContactSet()
+    return ContactSet(np.concatenate(P), np.concatenate(N), np.concatenate(L), np.concatenate(Pal))
+
+
+def _reach(shape: Shape) -> float:
+    """Radius of a sphere about the FCL frame centre enclosing the shape."""
+    from app.hand.geometry import CapsuleShape
+
+    if isinstance(shape, CapsuleShape):
+        return shape.length / 2 + shape.radius
+    return float(np.linalg.norm(shape.hi_link - shape.lo_link)) / 2
+
+
+def merge(a: ContactSet, b: ContactSet) -> ContactSet:
+    """Union of two contact sets."""
+    if len(a) == 0:
+        return b
+    if len(b) == 0:
+        return a
+    return ContactSet(
+        np.concatenate([a.p_object, b.p_object]),
+        np.concatenate([a.n_object, b.n_object]),
+        np.concatenate([a.link, b.link]),
+        np.concatenate([a.palmar, b.palmar]),
+    )

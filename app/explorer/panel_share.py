@@ -1,0 +1,109 @@
+"""Export and sharing: save the view as PNG (and download it), the state link, a share URL."""
+
+from __future__ import annotations
+
+import io
+import socket
+import threading
+import time
+from typing import TYPE_CHECKING
+
+import numpy as np
+import viser
+
+if TYPE_CHECKING:
+    from app.explorer.session import Session
+
+SHARE_TIMEOUT_S = 10.0
+RENDER_SIZE = (900, 1400)  # (height, width)
+
+
+def png_bytes(rgb: np.ndarray) -> bytes:
+    """Encode an (H, W, 3|4) uint8 image as PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    buf = io.BytesIO()
+    plt.imsave(buf, np.ascontiguousarray(rgb), format="png")
+    return buf.getvalue()
+
+
+def lan_hint(port: int) -> str:
+    """How to reach this server from another machine of the network."""
+    try:
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+            s.connect(("192.0.2.1", 9))  # no packet is sent (UDP connect)
+            ip = s.getsockname()[0]
+    except OSError:
+        ip = "<this machine's IP>"
+    return (
+        f"On the local network: run `handbench serve --host 0.0.0.0 --port {port}` and open "
+        f"`http://{ip}:{port}`."
+    )
+
+
+def request_share_url(server: viser.ViserServer, timeout_s: float = SHARE_TIMEOUT_S) -> str | None:
+    """viser's public share URL, or None when offline or slower than ``timeout_s``."""
+    box: list[str | None] = [None]
+
+    def run() -> None:
+        try:
+            box[0] = server.request_share_url(verbose=False)
+        except Exception:  # noqa: BLE001 - offline shows up as any network error
+            box[0] = None
+
+    t = threading.Thread(target=run, name="share-url", daemon=True)
+    t.start()
+    t.join(timeout_s)
+    return box[0]
+
+
+class SharePanel:
+    """'Save PNG', the link of the current state, 'Public share URL'."""
+
+    def __init__(self, gui: viser.GuiApi, session: Session) -> None:
+        self.session = session
+        self.save = gui.add_button("Save PNG of the view", icon=viser.Icon.CAMERA)
+        self.saved = gui.add_markdown("")
+        self.link = gui.add_markdown("")
+        self.share = gui.add_button("Public share URL", icon=viser.Icon.SHARE)
+        self.share_md = gui.add_markdown("")
+        self.save.on_click(lambda _: self._save())
+        self.share.on_click(lambda _: self._share())
+
+    def update_link(self) -> None:
+        """Show the link that reopens the current design, object and GH."""
+        url = self.session.ctx.url_base + "/" + self.session.state_query()
+        self.link.content = f"Link to this state:  \n[{url}]({url})"
+
+    def _save(self) -> None:
+        s = self.session
+        self.saved.content = "rendering…"
+        h, w = RENDER_SIZE
+        try:
+            img = s.client.get_render(h, w, transport_format="png", timeout=30.0)
+        except (TimeoutError, RuntimeError) as e:
+            self.saved.content = f"could not render: {e}"
+            return
+        data = png_bytes(img)
+        d = s.design
+        name = f"handbench_c{d.cmc_deg:g}_m{d.mcp_deg:g}_{s.object_key}_gh{s.gh}_{int(time.time())}.png"
+        s.ctx.shots_dir.mkdir(parents=True, exist_ok=True)
+        path = s.ctx.shots_dir / name
+        path.write_bytes(data)
+        s.client.send_file_download(name, data)
+        self.saved.content = f"saved `{path}` (and sent as a download)"
+
+    def _share(self) -> None:
+        self.share_md.content = "asking viser's share server…"
+        url = request_share_url(self.session.ctx.server)
+        port = self.session.ctx.server.get_port()
+        if url:
+            self.share_md.content = f"Public URL (24 h): [{url}]({url})"
+        else:
+            self.share_md.content = (
+                "No public share URL (offline, or the share server did not answer in "
+                f"{SHARE_TIMEOUT_S:g} s).  \n" + lan_hint(port)
+            )

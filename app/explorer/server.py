@@ -1,0 +1,143 @@
+"""Start the explorer: one viser server, one ``Session`` per browser tab.
+
+``serve()`` blocks (the ``handbench serve`` command); ``ExplorerServer`` runs in the
+background for tests and the screenshot command.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+import viser
+
+from app.objects import OBJECT_KEYS, load_object
+from app.store import ResultStore, default_store_path
+from app.sweep import Executor, InlineExecutor, LocalExecutor
+from app.explorer.session import ExplorerContext, Session
+
+OBJECTS_ENV = "HANDBENCH_EXPLORER_OBJECTS"
+"""Comma list of object keys for the S_GAS panel and the map (default: all six)."""
+WORKERS_ENV = "HANDBENCH_EXPLORER_WORKERS"
+"""Processes for the S_GAS computation; 0 runs it in a thread of the server."""
+
+
+class _SharedLocalExecutor(LocalExecutor):
+    """A process pool shared by the tabs (pool creation guarded against a race)."""
+
+    def __init__(self, workers: int | None = None) -> None:
+        super().__init__(workers)
+        self._create_lock = threading.Lock()
+
+    def _get_pool(self):  # type: ignore[override]  # noqa: ANN202
+        with self._create_lock:
+            return super()._get_pool()
+
+
+def _objects_from_env() -> tuple[str, ...]:
+    env = os.environ.get(OBJECTS_ENV, "").strip()
+    return tuple(k.strip() for k in env.split(",") if k.strip()) if env else OBJECT_KEYS
+
+
+def _workers_from_env() -> int | None:
+    env = os.environ.get(WORKERS_ENV, "").strip()
+    return int(env) if env else None
+
+
+class ExplorerServer:
+    """The viser server and the sessions of the connected tabs."""
+
+    def __init__(
+        self,
+        host: str = "127.0.0.1",
+        port: int = 8080,
+        store_path: str | Path | None = None,
+        *,
+        objects: Sequence[str] | None = None,
+        workers: int | None = None,
+        shots_dir: str | Path | None = None,
+        debounce_s: float = 0.3,
+    ) -> None:
+        objs = tuple(objects) if objects else _objects_from_env()
+        for k in objs:
+            load_object(k)  # UnknownObjectError lists the valid keys
+        workers = _workers_from_env() if workers is None else workers
+        self.executor: Executor = InlineExecutor() if workers == 0 else _SharedLocalExecutor(workers)
+        self.store = ResultStore(Path(store_path) if store_path else default_store_path())
+        self.viser = viser.ViserServer(host=host, port=port, label="handbench", verbose=False)
+        shown_host = "127.0.0.1" if host in ("0.0.0.0", "::") else host
+        self.url = f"http://{shown_host}:{self.viser.get_port()}"
+        self.ctx = ExplorerContext(
+            store=self.store,
+            objects=objs,
+            executor=self.executor,
+            shots_dir=Path(shots_dir) if shots_dir else Path("out") / "screenshots",
+            url_base=self.url,
+            server=self.viser,
+            default_object="chips_can" if "chips_can" in objs else objs[0],
+            debounce_s=debounce_s,
+        )
+        self.sessions: dict[int, Session] = {}
+        self._lock = threading.Lock()
+        self.viser.on_client_connect(self._connect)
+        self.viser.on_client_disconnect(self._disconnect)
+
+    def _connect(self, client: viser.ClientHandle) -> None:
+        s = Session(client, self.ctx)
+        with self._lock:
+            self.sessions[client.client_id] = s
+
+    def _disconnect(self, client: viser.ClientHandle) -> None:
+        with self._lock:
+            s = self.sessions.pop(client.client_id, None)
+        if s is not None:
+            s.close()
+
+    def wait_for_session(self, timeout: float = 30.0, count: int = 1) -> list[Session]:
+        """Block until ``count`` tabs are connected and have drawn their first scene."""
+        t_end = time.monotonic() + timeout
+        while time.monotonic() < t_end:
+            with self._lock:
+                ss = list(self.sessions.values())
+            if len(ss) >= count and all(s.ready.is_set() for s in ss):
+                return ss
+            time.sleep(0.05)
+        raise TimeoutError(f"{count} explorer tab(s) did not become ready in {timeout:g} s")
+
+    def stop(self) -> None:
+        """Close every session, the executor, the store and the server."""
+        with self._lock:
+            ss = list(self.sessions.values())
+            self.sessions.clear()
+        for s in ss:
+            s.close()
+        self.viser.stop()
+        self.executor.close()
+        self.store.close()
+
+
+def serve(
+    host: str = "127.0.0.1",
+    port: int = 8080,
+    store_path: str | Path | None = None,
+    *,
+    objects: Sequence[str] | None = None,
+    workers: int | None = None,
+) -> None:
+    """Run the explorer until Ctrl-C."""
+    srv = ExplorerServer(host, port, store_path, objects=objects, workers=workers)
+    print(f"handbench explorer: open {srv.url} in a browser (Ctrl-C stops)", flush=True)
+    if host in ("0.0.0.0", "::"):
+        print("listening on every interface: other machines use http://<this machine's IP>:"
+              f"{srv.viser.get_port()}", flush=True)  # fmt: skip
+    print(f"results store: {srv.store.path}", flush=True)
+    try:
+        while True:
+            time.sleep(3600)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        srv.stop()

@@ -1,0 +1,387 @@
+"""One browser tab: its design state, its scene and panels, its workers.
+
+Every tab has its own ``Session`` (built in ``server.on_client_connect``) and draws only
+through ``client.scene`` and ``client.gui``, so two tabs never share state. Handlers take
+the session lock; a burst of slider events is coalesced to the newest value.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import viser
+
+from app.closing_settings import ClosingSettings
+from app.design import BASELINE, ThumbDesign
+from app.errors import HandbenchError
+from app.hand.model import Hand, build_hand
+from app.hypotheses import Hypotheses
+from app.judge import judge
+from app.objects import available_keys, load_object
+from app.replay import Replay, replay
+from app.settings import SimSettings
+from app.simulate import HandKit
+from app.store import GraspOutcome, ResultStore
+from app.sweep import Executor, cached_hypotheses, design_key, object_key
+from app.explorer import url_state
+from app.explorer.panel_design import DesignPanel
+from app.explorer.panel_map import MapPanel
+from app.explorer.panel_replay import ReplayPanel, outcome_markdown
+from app.explorer.panel_score import ScorePanel, ScoreWorker
+from app.explorer.panel_share import SharePanel
+from app.explorer.scene_hand import HandView
+from app.explorer.scene_object import ObjectView
+from app.explorer.units import MM
+
+REPLAY_HZ = 30.0
+
+
+@dataclass
+class ExplorerContext:
+    """What every session shares (read-only, or thread-safe)."""
+
+    store: ResultStore
+    """Results store (thread-safe)."""
+    objects: tuple[str, ...]
+    """Objects of the S_GAS panel and the design map."""
+    executor: Executor
+    """Runs the S_GAS tasks (shared by the tabs; each tab cancels its own)."""
+    shots_dir: Path
+    """Where 'Save PNG' writes."""
+    url_base: str
+    """'http://127.0.0.1:8080' for the state links."""
+    server: viser.ViserServer
+    """The viser server (share URL)."""
+    default_object: str = "chips_can"
+    debounce_s: float = 0.3
+
+
+@dataclass
+class Timings:
+    """Measured latencies of this tab (seconds)."""
+
+    hand_redraw: list[float] = field(default_factory=list)
+    """Design change: handler start until the new hand poses were sent."""
+    grasp_redraw: list[float] = field(default_factory=list)
+    """Design change: handler start until the re-simulated grasp was sent."""
+
+
+class Session:
+    """The state and handlers of one tab."""
+
+    def __init__(self, client: viser.ClientHandle, ctx: ExplorerContext) -> None:
+        self.client = client
+        self.ctx = ctx
+        self.lock = threading.RLock()
+        self.ready = threading.Event()
+        """Set once the link state is applied and the first scene is sent."""
+        self.timings = Timings()
+        self.design = BASELINE
+        self.mode = "sequential"
+        self.object_key = ctx.default_object
+        self.hand: Hand = build_hand(self.design.cmc_deg, self.design.mcp_deg)
+        self.kit = HandKit(self.hand)
+        self.obj = load_object(self.object_key)
+        self.hyps: Hypotheses = cached_hypotheses(self.object_key)
+        self.gh = 0
+        self.last: Replay | None = None
+        self.outcome: GraspOutcome | None = None
+        self._closed = False
+        self._player: threading.Thread | None = None
+        self._player_cancel = threading.Event()
+        self._req_lock = threading.Lock()
+        self._req: ThumbDesign | None = None
+        self._busy = False
+
+        self._setup_scene()
+        self._setup_gui()
+        self.worker = ScoreWorker(
+            ctx.store, ctx.objects, self.score_panel.show, self._object_scored,
+            executor=ctx.executor, debounce_s=ctx.debounce_s,
+        )  # fmt: skip
+        self._probe_key = url_state.new_probe_key()
+        self._probe = self.client.gui.add_html(url_state.probe_html(self._probe_key))
+        threading.Thread(target=self._start, name="session-start", daemon=True).start()
+
+    # ------------------------------------------------------------------ set-up
+    @property
+    def settings(self) -> SimSettings:
+        """Simulation settings of this tab (the closing mode is the tab's choice)."""
+        return SimSettings(closing=ClosingSettings(mode=self.mode))  # type: ignore[arg-type]
+
+    def _setup_scene(self) -> None:
+        scene = self.client.scene
+        scene.configure_environment_map(hdri=None)
+        scene.set_up_direction("+z")
+        scene.add_light_ambient("/lights/ambient", intensity=0.9)
+        scene.add_light_directional("/lights/key", intensity=2.2, wxyz=(0.88, 0.28, 0.36, 0.0))
+        scene.add_light_directional("/lights/fill", intensity=0.8, wxyz=(0.5, -0.5, 0.5, 0.5))
+        scene.add_grid("/floor", width=0.6, height=0.6, cell_size=0.05, section_size=0.1)
+        self.hand_view = HandView(scene, self.hand)
+        self.object_view = ObjectView(scene)
+
+    def _setup_gui(self) -> None:
+        gui = self.client.gui
+        gui.configure_theme(control_width="large")
+        gui.add_markdown("**handbench** design explorer")
+        tabs = gui.add_tab_group()
+        with tabs.add_tab("Design", viser.Icon.HAND_FINGER):
+            self.design_panel = DesignPanel(gui, self.on_design, self.hand_view.set_axes_visible)
+            keys = available_keys()
+            self.object_dd = gui.add_dropdown("Object", options=keys, initial_value=self.object_key)
+            self.object_dd.on_update(lambda _: self.on_object(self.object_dd.value))
+            with gui.add_folder("Live S_GAS"):
+                self.score_panel = ScorePanel(gui)
+        with tabs.add_tab("Grasp", viser.Icon.PLAYER_PLAY):
+            self.replay_panel = ReplayPanel(gui, self.on_gh, self.on_play, self.on_mode)
+        with tabs.add_tab("Map", viser.Icon.MAP):
+            self.map_panel = MapPanel(gui, self.ctx.store, self.ctx.objects, self._map_select)
+        with tabs.add_tab("Share", viser.Icon.SHARE):
+            self.share_panel = SharePanel(gui, self)
+
+    def _start(self) -> None:
+        """Read the link state of this tab, draw the first scene, start the S_GAS worker."""
+        state = url_state.UrlState()
+        try:
+            search = self._read_probe(timeout_s=5.0)
+            if search:
+                state = url_state.parse_query(search)
+        except (TimeoutError, RuntimeError, HandbenchError) as e:
+            self.notify("Link not applied", str(e))
+        self._probe.remove()
+        if self._closed:
+            return
+        try:
+            self.apply_state(state)
+        except HandbenchError as e:
+            self.notify("Link not applied", str(e))
+            self.apply_state(url_state.UrlState())
+        self.ready.set()
+
+    def _read_probe(self, timeout_s: float) -> str | None:
+        """Poll this tab's localStorage for the link query the probe writes."""
+        t_end = time.monotonic() + timeout_s
+        while time.monotonic() < t_end and not self._closed:
+            v = self.client.local_storage.get_item(self._probe_key, timeout=timeout_s)
+            if v is not None:
+                self.client.local_storage.remove_item(self._probe_key)
+                return v
+            time.sleep(0.05)
+        raise TimeoutError(f"the page did not report its link within {timeout_s:g} s")
+
+    def apply_state(self, s: url_state.UrlState) -> None:
+        """Object, design and GH of a link (unset parts keep their values)."""
+        with self.lock:
+            key = s.object_key or self.object_key
+            if key not in available_keys():
+                load_object(key)  # raises UnknownObjectError naming the valid keys
+            self._set_object(key, redraw=False)
+            if s.gh is not None:
+                gh: str | int = int(s.gh) if s.gh.isdigit() else s.gh
+                self.gh = self.hyps.index_of(gh)
+            self.replay_panel.select_index(self.gh)
+            c = self.design.cmc_deg if s.cmc_deg is None else s.cmc_deg
+            m = self.design.mcp_deg if s.mcp_deg is None else s.mcp_deg
+            design = ThumbDesign(c, m)
+            self.design_panel.set_design(design.cmc_deg, design.mcp_deg)
+            self._apply_design(design)
+            self.frame_camera()
+
+    def notify(self, title: str, body: str) -> None:
+        """A toast in this tab."""
+        try:
+            self.client.add_notification(title, body, auto_close_seconds=8.0)
+        except Exception:  # noqa: BLE001 - a closed tab cannot be notified
+            pass
+
+    # ------------------------------------------------------------------ handlers
+    def on_design(self, cmc_deg: float, mcp_deg: float) -> None:
+        """Slider handler: coalesce a burst, apply the newest design."""
+        with self._req_lock:
+            self._req = ThumbDesign(cmc_deg, mcp_deg)
+            if self._busy:
+                return
+            self._busy = True
+        while True:
+            with self._req_lock:
+                req, self._req = self._req, None
+                if req is None or self._closed:
+                    self._busy = False
+                    return
+            with self.lock:
+                self._apply_design(req)
+
+    def _apply_design(self, design: ThumbDesign) -> None:
+        t0 = time.perf_counter()
+        self._stop_player()
+        self.design = design
+        self.hand = build_hand(design.cmc_deg, design.mcp_deg)
+        self.kit = HandKit(self.hand)
+        T, q = self.hand_view.T_object_palm, self.hand_view.q
+        with self.client.atomic():
+            self.hand_view.set_pose(self.hand, T, q)
+        self.client.flush()
+        t1 = time.perf_counter()
+        self._show_final()
+        t2 = time.perf_counter()
+        self.timings.hand_redraw.append(t1 - t0)
+        self.timings.grasp_redraw.append(t2 - t0)
+        self.worker.request(design, self.settings)
+        self._refresh_outcomes()
+        self.map_panel.set_current(design.cmc_deg, design.mcp_deg)
+        self.share_panel.update_link()
+
+    def on_object(self, key: str) -> None:
+        """Object dropdown."""
+        with self.lock:
+            if key == self.object_key:
+                return
+            self._set_object(key, redraw=True)
+            self.frame_camera()
+
+    def _set_object(self, key: str, redraw: bool) -> None:
+        self._stop_player()
+        self.object_key = key
+        self.obj = load_object(key)
+        self.hyps = cached_hypotheses(key)
+        self.gh = min(self.gh, len(self.hyps) - 1)
+        if self.object_dd.value != key:
+            self.object_dd.value = key
+        self.object_view.set_object(self.obj.mesh.vertices, self.obj.mesh.faces)
+        self.replay_panel.set_hypotheses(self.hyps)
+        self.replay_panel.select_index(self.gh)
+        self._refresh_outcomes()
+        if redraw:
+            self._show_final()
+            self.share_panel.update_link()
+
+    def on_gh(self, i: int) -> None:
+        """GH slider / filters."""
+        with self.lock:
+            self._stop_player()
+            self.gh = i
+            self._show_final()
+            self.share_panel.update_link()
+
+    def on_mode(self, mode: str) -> None:
+        """Closing mode: changes the simulation settings (and so the stored results used)."""
+        with self.lock:
+            self.mode = mode
+            self._show_final()
+            self.worker.request(self.design, self.settings)
+            self._refresh_outcomes()
+            self.map_panel.set_settings(self.settings)
+
+    def _map_select(self, cmc_deg: float, mcp_deg: float) -> None:
+        self.design_panel.set_design(cmc_deg, mcp_deg)
+
+    # ------------------------------------------------------------------ grasp
+    def _show_final(self) -> None:
+        """Simulate the selected GH at the current design and draw its final grasp."""
+        i = self.gh
+        s = self.settings
+        rep = replay(self.kit, self.obj, self.hyps, i, s)
+        out = judge(rep.grasp, self.obj, s, rep.base.queries + rep.grasp.queries)
+        self.last, self.outcome = rep, out
+        g = rep.grasp
+        with self.client.atomic():
+            self.hand_view.set_pose(self.hand, g.T_object_palm, g.q)
+            self.object_view.set_cone(self.hyps, i)
+            self.object_view.set_palm_point(
+                g.T_object_palm, self.hand.approach_point_palm, self.obj.spec.setup.hand_vector_palm
+            )
+            self.object_view.set_contacts(g.contacts)
+            self.replay_panel.stage.content = "final grasp"
+            self.replay_panel.result.content = outcome_markdown(
+                out, self.hyps.ids[i], len(g.contacts)
+            )
+        self.client.flush()
+
+    def on_play(self) -> None:
+        """Play the replay of the selected GH (approach, back-off, closing stages)."""
+        with self.lock:
+            self._stop_player()
+            rep = self.last
+            if rep is None:
+                return
+            cancel = threading.Event()
+            self._player_cancel = cancel
+            self._player = threading.Thread(
+                target=self._play, args=(rep, self.hand, cancel), name="replay", daemon=True
+            )
+            self._player.start()
+
+    def _play(self, rep: Replay, hand: Hand, cancel: threading.Event) -> None:
+        self.object_view.set_contacts(None)
+        period = 1.0 / REPLAY_HZ
+        t_next = time.perf_counter()
+        for f in rep.frames:
+            if cancel.is_set() or self._closed:
+                return
+            with self.client.atomic():
+                self.hand_view.set_pose(hand, f.T_object_palm, f.q)
+                self.object_view.set_palm_point(
+                    f.T_object_palm, hand.approach_point_palm, self.obj.spec.setup.hand_vector_palm
+                )
+                self.replay_panel.stage.content = f"replay: {f.label}"
+            self.client.flush()
+            t_next += period
+            time.sleep(max(0.0, t_next - time.perf_counter()))
+        if not cancel.is_set():
+            self.object_view.set_contacts(rep.grasp.contacts)
+            self.replay_panel.stage.content = "final grasp"
+
+    def _stop_player(self) -> None:
+        self._player_cancel.set()
+        p = self._player
+        if p is not None and p is not threading.current_thread():
+            p.join(timeout=1.0)
+        self._player = None
+
+    # ------------------------------------------------------------------ scores
+    def _object_scored(self, key: str) -> None:
+        if key == self.object_key:
+            self._refresh_outcomes()
+        self.map_panel.refresh()
+
+    def _refresh_outcomes(self) -> None:
+        """Stored per-GH outcomes of this design and object (for the outcome filter)."""
+        outs = self.ctx.store.get_many(
+            design_key(self.design), object_key(self.object_key), self.settings.key(),
+            list(self.hyps.ids),
+        )  # fmt: skip
+        self.replay_panel.set_outcomes(outs)
+
+    # ------------------------------------------------------------------ view
+    def frame_camera(self) -> None:
+        """Point the camera at the object and the hand from the radial-palmar side."""
+        pts = [self.obj.mesh.bounds]
+        T = self.hand_view.T_object_palm
+        pts.append((T[:3, :3] @ self.hand.approach_point_palm + T[:3, 3])[None])
+        allp = np.vstack(pts)
+        lo, hi = allp.min(axis=0), allp.max(axis=0)
+        centre = (lo + hi) / 2
+        radius = float(np.linalg.norm(hi - lo)) / 2 + 60.0
+        view = np.array([0.9, -1.3, 0.7])
+        view /= np.linalg.norm(view)
+        cam = self.client.camera
+        cam.up_direction = (0.0, 0.0, 1.0)
+        cam.position = tuple((centre + view * radius * 2.4) * MM)
+        cam.look_at = tuple(centre * MM)  # after position: position moves look_at along
+
+    def state_query(self) -> str:
+        """The link query of the current state."""
+        return url_state.UrlState(
+            self.design.cmc_deg, self.design.mcp_deg, self.object_key, str(self.gh)
+        ).query()
+
+    # ------------------------------------------------------------------ teardown
+    def close(self) -> None:
+        """The tab closed: cancel and free its work."""
+        self._closed = True
+        self._stop_player()
+        self.worker.close()

@@ -1,0 +1,73 @@
+"""Links that open a state: ``http://host:port/?cmc=30&mcp=75&object=chips_can&gh=17``.
+
+viser does not tell the server a page's URL (the websocket URL drops the query). So each new
+tab gets a hidden HTML element whose image ``onerror`` handler copies ``location.search``
+into the tab's localStorage under a key unique to that tab; the server reads it back with
+``client.local_storage.get_item`` (viser's own API) and applies it. A key per tab keeps two
+tabs opened at once from reading each other's link.
+"""
+
+from __future__ import annotations
+
+import uuid
+from dataclasses import dataclass
+from urllib.parse import parse_qs, urlencode
+
+from app.errors import HandbenchError
+
+LOCAL_STORAGE_PREFIX = "viser-user:"
+"""The prefix viser's client puts before keys written through ``client.local_storage``."""
+
+
+class UrlStateError(HandbenchError, ValueError):
+    """A link whose query holds an invalid value."""
+
+
+@dataclass(frozen=True)
+class UrlState:
+    """The state a link asks for (None: keep the default)."""
+
+    cmc_deg: float | None = None
+    mcp_deg: float | None = None
+    object_key: str | None = None
+    gh: str | None = None
+    """Hypothesis index ('17') or id ('chips_can/r07/d00/t03')."""
+    tab: str | None = None
+    """Panel tab to open first: 'design', 'grasp', 'map' (for screenshots)."""
+
+    def query(self) -> str:
+        """'?cmc=30&mcp=75&object=chips_can&gh=17' (unset fields left out)."""
+        d = {
+            "cmc": None if self.cmc_deg is None else f"{self.cmc_deg:g}",
+            "mcp": None if self.mcp_deg is None else f"{self.mcp_deg:g}",
+            "object": self.object_key,
+            "gh": self.gh,
+            "tab": self.tab,
+        }
+        return "?" + urlencode({k: v for k, v in d.items() if v is not None}, safe="/")
+
+
+def parse_query(search: str) -> UrlState:
+    """Parse ``location.search`` ('?cmc=30&...'); unknown keys are ignored."""
+    q = {k: v[-1] for k, v in parse_qs(search.lstrip("?")).items()}
+
+    def num(name: str) -> float | None:
+        if name not in q:
+            return None
+        try:
+            return float(q[name])
+        except ValueError:
+            raise UrlStateError(f"link parameter {name}={q[name]!r} is not a number") from None
+
+    return UrlState(num("cmc"), num("mcp"), q.get("object"), q.get("gh"), q.get("tab"))
+
+
+def new_probe_key() -> str:
+    """A localStorage key unique to one tab."""
+    return f"handbench-url-{uuid.uuid4().hex}"
+
+
+def probe_html(key: str) -> str:
+    """Hidden HTML that writes this tab's ``location.search`` to localStorage[key]."""
+    js = f"localStorage.setItem('{LOCAL_STORAGE_PREFIX}{key}', window.location.search || '?');"
+    return f'<img alt="" src="data:image/gif;base64,x" style="display:none" onerror="{js}">'

@@ -1,0 +1,205 @@
+"""Simulate grasp hypotheses: the design-independent base stage, then the thumb stage.
+
+Cost model (METHOD §3a; docs/cost-model.md): the approach, the back-off and the long
+fingers' closing depend on the object, the hypothesis and the palm only, so ``simulate_base``
+runs once per hypothesis and its ``BaseGrasp`` serves every thumb design. The thumb is
+excluded from the approach (a decision: it keeps the placement independent of the thumb
+design) and closes last, against the object and, for self-collision, against the palm and
+the long fingers in their final posture. Only ``simulate_thumb`` runs per design.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import fcl
+import numpy as np
+
+from app.closing import ClosingStats, Obstacles, approach, close_finger, fcl_transform
+from app.contact_set import LONG_FINGERS, ContactSet
+from app.contacts import _reach, contacts_of_links, merge
+from app.hand.chains import FingerChain, finger_chains
+from app.hand.model import Hand
+from app.hypotheses import Hypotheses
+from app.settings import SimSettings
+
+
+class HandKit:
+    """A hand's chains and its private FCL bodies (one kit per worker thread/process)."""
+
+    def __init__(self, hand: Hand) -> None:
+        self.hand = hand
+        self.chains: dict[str, FingerChain] = finger_chains(hand)
+        self.names = [lk.name for lk in hand.links]
+        self.shapes = [lk.shape for lk in hand.links]
+        self.T_link_fcl = np.stack([s.T_link_fcl() for s in self.shapes])
+        self.moving = [fcl.CollisionObject(s.fcl_geometry(), fcl.Transform()) for s in self.shapes]
+        self.static = [fcl.CollisionObject(s.fcl_geometry(), fcl.Transform()) for s in self.shapes]
+        self.q_open = hand.q_open
+        self.reach = np.array([_reach(sh) for sh in self.shapes])
+        T_open = hand.link_poses(self.q_open)
+        # approach bodies: palm + long-finger links, open
+        self.approach_idx = [0] + [i for i, n in enumerate(self.names) if n.split("_")[0] in LONG_FINGERS]
+        self.T_palm_approach = np.stack([T_open[i] @ self.T_link_fcl[i] for i in self.approach_idx])
+
+    def bodies(self, finger: str) -> list[fcl.CollisionObject]:
+        """The moving FCL bodies of a finger's three links."""
+        return [self.moving[i] for i in self.chains[finger].link_indices]
+
+
+@dataclass(frozen=True)
+class BaseGrasp:
+    """The design-independent part of one hypothesis' grasp."""
+
+    approached: bool
+    """False when the approach line never brought the hand into contact (the GH fails)."""
+    T_object_palm: np.ndarray
+    """(4, 4) hand placement after approach and back-off."""
+    q: np.ndarray
+    """(15,) joint angles with the long fingers final and the thumb open, rad."""
+    contacts: ContactSet
+    """Contacts of the palm and the long fingers."""
+    queries: int
+    """FCL distance queries spent."""
+
+
+@dataclass(frozen=True)
+class Grasp:
+    """A hypothesis' final grasp at one thumb design."""
+
+    T_object_palm: np.ndarray
+    """(4, 4) hand placement, object frame."""
+    q: np.ndarray
+    """(15,) final joint angles, rad."""
+    contacts: ContactSet
+    """All contacts (palm, long fingers, thumb), object frame."""
+    thumb_n_main_object: np.ndarray
+    """(3,) the thumb distal phalanx long axis, object frame."""
+    approached: bool
+    """False when the approach failed (no contacts, not FC)."""
+    queries: int
+    """FCL distance queries of the thumb stage (the base stage counts its own)."""
+    events: tuple[str, ...] = ()
+    """Closing stage events of the thumb, for the explorer's replay and debugging."""
+
+
+def closing_fingers(grasp_type: str) -> tuple[str, ...]:
+    """Fingers that close: thumb + index for PP, all for CG (METHOD §3a)."""
+    return ("thumb", "index") if grasp_type == "PP" else ("thumb",) + LONG_FINGERS
+
+
+def simulate_base(
+    kit: HandKit,
+    obj: object,
+    hyps: Hypotheses,
+    i: int,
+    settings: SimSettings,
+    stats: ClosingStats | None = None,
+) -> BaseGrasp:
+    """Approach, back off by the standoff, close the long fingers; contacts of palm + fingers."""
+    closing = settings.closing
+    stats = stats if stats is not None else ClosingStats()
+    pieces = obj.collision_objects()  # type: ignore[attr-defined]
+    spec = obj.spec  # type: ignore[attr-defined]
+    centroid = obj.centroid_object  # type: ignore[attr-defined]
+    R = hyps.R_object_palm[i]
+    ray = hyps.ray_object[i]
+    start = float(np.linalg.norm(hyps.target_object - centroid)) + obj.max_radius  # type: ignore[attr-defined]
+    start += closing.approach_clearance_mm
+    s = approach(
+        [kit.moving[j] for j in kit.approach_idx],
+        kit.T_palm_approach,
+        R,
+        ray,
+        hyps.target_object,
+        kit.hand.approach_point_palm,
+        pieces,
+        start,
+        closing,
+        stats,
+    )
+    T = np.eye(4)
+    T[:3, :3] = R
+    q = kit.q_open.copy()
+    if s is None:
+        T[:3, 3] = hyps.target_object + start * ray - R @ kit.hand.approach_point_palm
+        return BaseGrasp(False, T, q, ContactSet(), stats.queries)
+    s += float(hyps.standoff_mm[i])
+    T[:3, 3] = hyps.target_object + s * ray - R @ kit.hand.approach_point_palm
+    obstacles = Obstacles(list(pieces), len(pieces))
+    for finger in closing_fingers(spec.grasp_type):
+        if finger == "thumb":
+            continue
+        ch = kit.chains[finger]
+        q[list(ch.joints)] = close_finger(ch, kit.bodies(finger), T, obstacles, closing, stats)
+    T_links = T @ kit.hand.link_poses(q)
+    idx = [j for j, n in enumerate(kit.names) if not n.startswith("thumb")]
+    counter = [0]
+    cs = contacts_of_links(
+        obj,
+        [kit.names[j] for j in idx],
+        [kit.shapes[j] for j in idx],
+        [kit.moving[j] for j in idx],
+        T_links[idx],
+        kit.T_link_fcl[idx],
+        settings.contact,
+        settings.grasp_type.palmar_angle_deg,
+        counter,
+    )
+    return BaseGrasp(True, T, q, cs, stats.queries + counter[0])
+
+
+def simulate_thumb(
+    kit: HandKit,
+    obj: object,
+    base: BaseGrasp,
+    settings: SimSettings,
+    stats: ClosingStats | None = None,
+) -> Grasp:
+    """Close the thumb of ``kit``'s design on a base grasp; all contacts of the final grasp."""
+    q = base.q.copy()
+    T = base.T_object_palm
+    thumb = kit.chains["thumb"]
+    if not base.approached:
+        n_main = (T @ kit.hand.link_poses(q)[thumb.link_indices[2]])[:3, 1]
+        return Grasp(T, q, base.contacts, n_main, False, 0)
+    closing = settings.closing
+    stats = stats if stats is not None else ClosingStats()
+    pieces = list(obj.collision_objects())  # type: ignore[attr-defined]
+    # self-collision bodies: palm and long-finger links, posed at the base posture
+    T_links = T @ kit.hand.link_poses(q)
+    others = [j for j, n in enumerate(kit.names) if not n.startswith("thumb")]
+    for j in others:
+        kit.static[j].setTransform(fcl_transform(T_links[j] @ kit.T_link_fcl[j]))
+    objs = pieces + [kit.static[j] for j in others]
+    mask = np.ones((3, len(objs)), bool)
+    mask[0, len(pieces)] = False  # the metacarpal sits in the thenar: never against the palm
+    spheres = np.full((len(objs), 4), np.inf)
+    for n, j in enumerate(others):
+        spheres[len(pieces) + n, :3] = (T_links[j] @ kit.T_link_fcl[j])[:3, 3]
+        spheres[len(pieces) + n, 3] = kit.reach[j]
+    obstacles = Obstacles(objs, len(pieces), mask, spheres)
+    q[list(thumb.joints)] = close_finger(thumb, kit.bodies("thumb"), T, obstacles, closing, stats)
+    T_links = T @ kit.hand.link_poses(q)
+    idx = list(thumb.link_indices)
+    counter = [0]
+    cs = contacts_of_links(
+        obj,
+        [kit.names[j] for j in idx],
+        [kit.shapes[j] for j in idx],
+        [kit.moving[j] for j in idx],
+        T_links[idx],
+        kit.T_link_fcl[idx],
+        settings.contact,
+        settings.grasp_type.palmar_angle_deg,
+        counter,
+    )
+    return Grasp(
+        T,
+        q,
+        merge(base.contacts, cs),
+        T_links[idx[2]][:3, 1].copy(),
+        True,
+        stats.queries + counter[0],
+        tuple(stats.events),
+    )

@@ -1,0 +1,318 @@
+"""Run designs × objects × hypotheses, resumably, in parallel; aggregate S_GAS.
+
+Work unit (a *task*): one object, a chunk of its hypotheses, and the designs that still lack
+results for them. A worker computes each hypothesis' ``BaseGrasp`` once and then closes the
+thumb of every listed design on it (the cost model of docs/cost-model.md). The parent
+process is the only writer of the results store: one transaction per finished task, so a
+killed sweep loses at most the tasks in flight and never leaves half a task behind.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+from functools import lru_cache
+from multiprocessing import get_context
+
+from app.design import ThumbDesign
+from app.hand.data import load_hand_dims
+from app.hand.model import Hand
+from app.hypotheses import Hypotheses, hypotheses_for
+from app.judge import judge
+from app.objects import OBJECT_KEYS, load_object
+from app.scores import DesignScore, ObjectScore
+from app.settings import SimSettings
+from app.simulate import HandKit, simulate_base, simulate_thumb
+from app.store import GraspOutcome, ResultStore, stable_hash
+
+#: Hypotheses per task: small enough for a live progress bar, large enough to amortise.
+DEFAULT_CHUNK = 60
+
+
+def design_key(design: ThumbDesign) -> str:
+    """Store key of a design: the hand model file's hash + the thumb design."""
+    return stable_hash({"hand": load_hand_dims().content_hash, **design.as_dict()})
+
+
+@lru_cache(maxsize=32)
+def object_key(key: str) -> str:
+    """Store key of an object: hash of its mesh and grasp set-up."""
+    obj = load_object(key)
+    s = obj.spec
+    return stable_hash(
+        {
+            "key": s.key,
+            "grasp_type": s.grasp_type,
+            "target": s.target_object,
+            "normal": s.normal_object,
+            "grip": s.grip_axis_object,
+            "hint": s.palm_y_hint_object,
+            "setup": vars(s.setup),
+            "mesh": stable_hash({"v": obj.mesh.vertices.round(6), "f": obj.mesh.faces}),
+        }
+    )
+
+
+@lru_cache(maxsize=32)
+def cached_hypotheses(key: str) -> Hypotheses:
+    """The anthropomorphic hypotheses of an object (per process)."""
+    return hypotheses_for(load_object(key))
+
+
+@lru_cache(maxsize=64)
+def _kit(cmc_deg: float, mcp_deg: float, tilt: str) -> HandKit:
+    return HandKit(Hand(ThumbDesign(cmc_deg, mcp_deg, tilt), load_hand_dims()))  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class Task:
+    """Hypotheses ``gh`` of ``object_name`` for the designs in ``designs``."""
+
+    object_name: str
+    """Object key, e.g. 'chips_can'."""
+    gh: tuple[int, ...]
+    """Hypothesis indices."""
+    designs: tuple[ThumbDesign, ...]
+    """Designs to evaluate on every listed hypothesis."""
+    settings: SimSettings
+    """Simulation settings."""
+
+
+def run_task(task: Task) -> list[tuple[int, str, GraspOutcome]]:
+    """Simulate one task; returns (design index in task, GH id, outcome) triples."""
+    obj = load_object(task.object_name)
+    hyps = cached_hypotheses(task.object_name)
+    s = task.settings
+    base_kit = _kit(*task.designs[0].as_dict().values())  # type: ignore[arg-type]
+    kits = [_kit(*d.as_dict().values()) for d in task.designs]  # type: ignore[arg-type]
+    out: list[tuple[int, str, GraspOutcome]] = []
+    for i in task.gh:
+        base = simulate_base(base_kit, obj, hyps, i, s)
+        for di, kit in enumerate(kits):
+            g = simulate_thumb(kit, obj, base, s)
+            out.append((di, hyps.ids[i], judge(g, obj, s, base.queries + g.queries)))
+    return out
+
+
+# ----------------------------------------------------------------------------- executors
+class Executor:
+    """Runs tasks and yields their results as they finish."""
+
+    def run(self, tasks: Sequence[Task], cancel: threading.Event | None) -> Iterator[
+        tuple[Task, list[tuple[int, str, GraspOutcome]]]
+    ]:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        """Release workers."""
+
+
+class InlineExecutor(Executor):
+    """Runs tasks in this process, one after another (tests, the explorer's thread)."""
+
+    def run(self, tasks, cancel):  # type: ignore[override]
+        for t in tasks:
+            if cancel is not None and cancel.is_set():
+                return
+            yield t, run_task(t)
+
+
+class LocalExecutor(Executor):
+    """A pool of local processes (spawned: safe beside threads such as the web server)."""
+
+    def __init__(self, workers: int | None = None) -> None:
+        self.workers = workers or os.cpu_count() or 1
+        self._pool: ProcessPoolExecutor | None = None
+
+    def _get_pool(self) -> ProcessPoolExecutor:
+        if self._pool is None:
+            self._pool = ProcessPoolExecutor(self.workers, mp_context=get_context("spawn"))
+        return self._pool
+
+    def run(self, tasks, cancel):  # type: ignore[override]
+        pool = self._get_pool()
+        pending: dict[Future, Task] = {}
+        queue = list(tasks)[::-1]
+        while queue or pending:
+            while queue and len(pending) < 2 * self.workers:
+                t = queue.pop()
+                pending[pool.submit(run_task, t)] = t
+            done, _ = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+            if cancel is not None and cancel.is_set():
+                for f in pending:
+                    f.cancel()
+                return
+            for f in done:
+                yield pending.pop(f), f.result()
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+
+
+def make_executor(name: str, workers: int | None = None, address: str | None = None) -> Executor:
+    """'local' (process pool), 'inline' (this process) or 'ray'."""
+    if name == "local":
+        return InlineExecutor() if workers == 1 else LocalExecutor(workers)
+    if name == "inline":
+        return InlineExecutor()
+    if name == "ray":
+        from app.ray_executor import RayExecutor
+
+        return RayExecutor(address=address, workers=workers)
+    from app.errors import SettingsError
+
+    raise SettingsError(f"unknown executor {name!r}; choose one of ('local', 'inline', 'ray')")
+
+
+# ----------------------------------------------------------------------------- progress
+class Progress:
+    """A terminal progress bar on stderr (a line every few seconds when not a TTY)."""
+
+    def __init__(self, total: int, label: str = "grasps", stream=None) -> None:
+        self.total, self.done, self.label = total, 0, label
+        self.stream = stream or sys.stderr
+        self.t0 = time.perf_counter()
+        self._last = 0.0
+        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+
+    def update(self, n: int) -> None:
+        self.done += n
+        now = time.perf_counter()
+        if self.tty or now - self._last > 5 or self.done >= self.total:
+            self._last = now
+            el = now - self.t0
+            rate = self.done / el if el > 0 else 0.0
+            frac = self.done / self.total if self.total else 1.0
+            bar = "#" * int(30 * frac) + "-" * (30 - int(30 * frac))
+            eta = (self.total - self.done) / rate if rate > 0 else float("inf")
+            msg = (
+                f"[{bar}] {self.done}/{self.total} {self.label} "
+                f"{rate:,.0f}/s elapsed {el:.0f}s eta {eta:.0f}s"
+            )
+            print(("\r" if self.tty else "") + msg, end="" if self.tty else "\n", file=self.stream,
+                  flush=True)
+
+    def close(self) -> None:
+        if self.tty:
+            print(file=self.stream)
+
+
+# ----------------------------------------------------------------------------- sweep
+@dataclass
+class SweepResult:
+    """Scores of every design, in the order asked."""
+
+    designs: list[ThumbDesign]
+    """The designs."""
+    scores: list[DesignScore]
+    """Their scores."""
+    computed: int
+    """Outcomes computed in this run (the rest came from the store)."""
+    seconds: float
+    """Wall time of this run."""
+
+
+def plan_tasks(
+    store: ResultStore,
+    designs: Sequence[ThumbDesign],
+    object_names: Sequence[str],
+    settings: SimSettings,
+    chunk: int = DEFAULT_CHUNK,
+) -> list[Task]:
+    """Tasks for every (design, object, GH) not yet in the store."""
+    skey = settings.key()
+    dkeys = [design_key(d) for d in designs]
+    tasks: list[Task] = []
+    for name in object_names:
+        hyps = cached_hypotheses(name)
+        okey = object_key(name)
+        present = [store.present_ids(dk, okey, skey) for dk in dkeys]
+        for start in range(0, len(hyps), chunk):
+            idx = range(start, min(start + chunk, len(hyps)))
+            # group designs by which of these GHs they lack (usually: all or none)
+            groups: dict[tuple[int, ...], list[ThumbDesign]] = {}
+            for d, have in zip(designs, present, strict=True):
+                missing = tuple(i for i in idx if hyps.ids[i] not in have)
+                if missing:
+                    groups.setdefault(missing, []).append(d)
+            for missing, ds in groups.items():
+                tasks.append(Task(name, missing, tuple(ds), settings))
+    return tasks
+
+
+def run_sweep(
+    designs: Sequence[ThumbDesign],
+    object_names: Sequence[str] = OBJECT_KEYS,
+    *,
+    settings: SimSettings | None = None,
+    store: ResultStore,
+    executor: Executor | None = None,
+    chunk: int = DEFAULT_CHUNK,
+    progress: bool | Callable[[int, int], None] = True,
+    cancel: threading.Event | None = None,
+) -> SweepResult | None:
+    """Evaluate every design on every object; resumes from and writes to ``store``.
+
+    Returns None when cancelled. ``progress`` is True (terminal bar), False, or a callback
+    ``(done, total)``.
+    """
+    t0 = time.perf_counter()
+    settings = settings or SimSettings()
+    skey = settings.key()
+    store.put_settings_meta(skey, settings.as_dict())
+    for d in designs:
+        store.put_design_meta(design_key(d), d.as_dict())
+    for name in object_names:
+        store.put_object_meta(object_key(name), {"key": name})
+    tasks = plan_tasks(store, designs, object_names, settings, chunk)
+    total = sum(len(t.gh) * len(t.designs) for t in tasks)
+    bar = Progress(total) if progress is True and total else None
+    own = executor is None
+    executor = executor or LocalExecutor()
+    done = 0
+    try:
+        for task, results in executor.run(tasks, cancel):
+            okey = object_key(task.object_name)
+            by_design: dict[int, dict[str, GraspOutcome]] = {}
+            for di, gh_id, outcome in results:
+                by_design.setdefault(di, {})[gh_id] = outcome
+            with store.transaction():
+                for di, outs in by_design.items():
+                    store.put_many(design_key(task.designs[di]), okey, skey, outs)
+            done += len(results)
+            if bar:
+                bar.update(len(results))
+            elif callable(progress):
+                progress(done, total)
+    finally:
+        if bar:
+            bar.close()
+        if own:
+            executor.close()
+    if cancel is not None and cancel.is_set():
+        return None
+    scores = [score_design(store, d, object_names, settings) for d in designs]
+    return SweepResult(list(designs), scores, done, time.perf_counter() - t0)
+
+
+def score_design(
+    store: ResultStore, design: ThumbDesign, object_names: Iterable[str], settings: SimSettings
+) -> DesignScore:
+    """S_GAS of a design from the stored outcomes (all hypotheses must be present)."""
+    summary = store.summary(design_key(design), settings.key())
+    scores: dict[str, ObjectScore] = {}
+    types: dict[str, str] = {}
+    for name in object_names:
+        n, n_fc, n_c = summary.get(object_key(name), (0, 0, 0))
+        n_gh = len(cached_hypotheses(name))
+        assert n == n_gh, f"{name}: {n} of {n_gh} outcomes stored"
+        scores[name] = ObjectScore(n_gh, n_fc, n_c)
+        types[name] = load_object(name).spec.grasp_type
+    return DesignScore(scores, types)

@@ -1,0 +1,213 @@
+"""Collision-driven closing: tolerance, no penetration, semantics, modes, invariance."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import fcl
+import numpy as np
+import pytest
+from analytic_objects import AnalyticCylinder
+
+from app.closing import ClosingStats, Obstacles, close_finger, fcl_transform, pair_distance
+from app.closing_naive import close_finger_naive
+from app.closing_settings import ClosingSettings
+from app.contacts import ContactSettings
+from app.errors import SettingsError
+from app.hand.model import build_hand
+from app.hypotheses import make_hypotheses
+from app.settings import SimSettings
+from app.simulate import HandKit, simulate_base, simulate_thumb
+
+
+def can_hypotheses(target=(37.5, 0, 125.0), normal=(1.0, 0, 0), hint=(0, 1.0, 0), n_rays=28):
+    return make_hypotheses(
+        "can", np.array(target), np.array(normal), np.array(hint),
+        np.array([0.41, 0, 0.91]), 0.2, n_rays, [0.0], (-20, -50), 15,
+    )
+
+
+def link_distances(kit: HandKit, grasp, obj) -> np.ndarray:
+    """(16,) signed FCL distance of every link to the object at the final grasp."""
+    T_links = grasp.T_object_palm @ kit.hand.link_poses(grasp.q)
+    out = []
+    for j, body in enumerate(kit.moving):
+        body.setTransform(fcl_transform(T_links[j] @ kit.T_link_fcl[j]))
+        out.append(min(pair_distance(body, p) for p in obj.collision_objects()))
+    return np.array(out)
+
+
+@pytest.fixture(scope="module")
+def can_grasps():
+    obj = AnalyticCylinder()
+    hyps = can_hypotheses()
+    kit = HandKit(build_hand(0, 45))
+    s = SimSettings()
+    picks = range(0, len(hyps), 23)
+    grasps = [simulate_thumb(kit, obj, simulate_base(kit, obj, hyps, i, s), s) for i in picks]
+    return obj, kit, s, grasps
+
+
+def test_closing_stops_within_tolerance_without_penetration(can_grasps) -> None:
+    obj, kit, s, grasps = can_grasps
+    tol = s.closing.stop_tol_mm
+    for g in grasps:
+        d = link_distances(kit, g, obj)
+        assert d.min() > 0.0, "a link penetrates the object"
+        touching = d <= s.contact.contact_tol_mm
+        assert touching.sum() >= 4  # a cylindrical wrap touches with several links
+        # every closing joint that stopped short of its limit did so at a contact: the
+        # most distal link of its finger is within the stop tolerance
+        for finger in ("index", "middle", "ring", "little"):
+            ch = kit.chains[finger]
+            q = g.q[list(ch.joints)]
+            if (q < ch.q_upper - 1e-9).any():
+                assert d[list(ch.link_indices)].min() <= tol + 1e-6, finger
+
+
+def test_gap_stays_within_any_stop_tolerance() -> None:
+    obj, hyps = AnalyticCylinder(), can_hypotheses()
+    kit = HandKit(build_hand(0, 45))
+    for tol in (0.1, 0.3, 1.0):
+        s = SimSettings(closing=ClosingSettings(stop_tol_mm=tol), contact=ContactSettings(1.0))
+        for i in (5, 211):
+            g = simulate_thumb(kit, obj, simulate_base(kit, obj, hyps, i, s), s)
+            d = link_distances(kit, g, obj)
+            assert d.min() > 0.0
+            for finger in ("thumb", "index", "middle"):
+                ch = kit.chains[finger]
+                if (g.q[list(ch.joints)] < ch.q_upper - 1e-9).any():
+                    assert d[list(ch.link_indices)].min() <= tol + 1e-6
+
+
+@pytest.mark.parametrize("i", [0, 57, 140, 305])
+def test_final_angles_are_the_limit_of_fixed_step_closing(i: int) -> None:
+    """No step size in our closing: fixed-step closing converges to our angles as h -> 0.
+
+    Fixed stepping stops up to one step past the first touch in each stage; a near-tangent
+    contact can amplify that in the next stage, so the error shrinks with h rather than
+    being below h.
+    """
+    obj, hyps = AnalyticCylinder(), can_hypotheses()
+    kit = HandKit(build_hand(0, 45))
+    s = SimSettings()
+    base = simulate_base(kit, obj, hyps, i, s)
+    obstacles = Obstacles(list(obj.collision_objects()), 1)
+    for finger in ("index", "middle", "ring"):
+        ch = kit.chains[finger]
+        ours = close_finger(ch, kit.bodies(finger), base.T_object_palm, obstacles, s.closing,
+                            ClosingStats())
+        errors = []
+        for h in (0.004, 0.0004):
+            ref = close_finger_naive(ch, kit.bodies(finger), base.T_object_palm, obstacles,
+                                     s.closing, ClosingStats(), step_rad=h)
+            errors.append(np.rad2deg(np.abs(ours - ref)).max())
+        assert errors[1] <= errors[0] + 1e-9 or errors[1] < 0.1, (finger, errors)
+        assert errors[1] < 1.0, (finger, errors)
+
+
+def test_a_finger_in_free_space_closes_to_its_limits() -> None:
+    kit = HandKit(build_hand(0, 45))
+    far = fcl.CollisionObject(fcl.Sphere(5.0), fcl.Transform(np.array([0, 0, 5000.0])))
+    for mode in ("sequential", "coupled_tendon", "independent_thumb"):
+        s = ClosingSettings(mode=mode)  # type: ignore[arg-type]
+        for finger in ("thumb", "index", "little"):
+            ch = kit.chains[finger]
+            q = close_finger(ch, kit.bodies(finger), np.eye(4), Obstacles([far], 1), s,
+                             ClosingStats())
+            assert np.allclose(q, ch.q_upper), (mode, finger)
+
+
+def test_sequential_distal_contact_keeps_proximal_joints() -> None:
+    """A wall the index fingertip meets while the MCP closes: PIP and DIP stay open."""
+    kit = HandKit(build_hand(0, 45))
+    ch = kit.chains["index"]
+    # index tip at y ~ 164 at q = 0; a box just palmar of the tip region
+    wall = fcl.CollisionObject(fcl.Box(60, 20, 10), fcl.Transform(np.array([21.0, 158.0, 40.0])))
+    stats = ClosingStats()
+    q = close_finger(ch, kit.bodies("index"), np.eye(4), Obstacles([wall], 1), ClosingSettings(),
+                     stats)
+    assert 0 < q[0] < ch.q_upper[0]
+    assert q[1] == 0.0 and q[2] == 0.0
+    assert stats.events == ["index:[0]:contact"]
+
+
+def test_sequential_proximal_contact_then_distal_joints_close() -> None:
+    """A bar under the proximal phalanx: MCP stops on it, then PIP and DIP close."""
+    kit = HandKit(build_hand(0, 45))
+    ch = kit.chains["index"]
+    bar = fcl.CollisionObject(fcl.Box(60, 8, 8), fcl.Transform(np.array([21.0, 95.0, 25.0])))
+    stats = ClosingStats()
+    q = close_finger(ch, kit.bodies("index"), np.eye(4), Obstacles([bar], 1), ClosingSettings(),
+                     stats)
+    assert 0 < q[0] < ch.q_upper[0]
+    assert q[1] > 0.3  # the PIP closed afterwards
+    assert stats.events[0] == "index:[0]:contact"
+    assert stats.events[1].startswith("index:[1]:")
+
+
+def test_coupled_tendon_moves_joints_together() -> None:
+    kit = HandKit(build_hand(0, 45))
+    ch = kit.chains["index"]
+    wall = fcl.CollisionObject(fcl.Box(60, 80, 10), fcl.Transform(np.array([21.0, 110.0, 45.0])))
+    s = ClosingSettings(mode="coupled_tendon", tendon_ratios=(1.0, 1.0, 0.8))
+    stats = ClosingStats()
+    q = close_finger(ch, kit.bodies("index"), np.eye(4), Obstacles([wall], 1), s, stats)
+    assert stats.events[0] == "index:[0, 1, 2]:contact"
+    assert q[1] == pytest.approx(q[0]) or q[1] > q[0]  # PIP at least as closed as MCP
+    assert q[0] > 0
+
+
+def test_thumb_self_collision_never_penetrates_the_fingers(can_grasps) -> None:
+    obj, kit, s, grasps = can_grasps
+    for g in grasps:
+        T_links = g.T_object_palm @ kit.hand.link_poses(g.q)
+        thumb = kit.chains["thumb"].link_indices
+        for j in range(len(kit.names)):
+            kit.static[j].setTransform(fcl_transform(T_links[j] @ kit.T_link_fcl[j]))
+        for t in thumb[1:]:
+            kit.moving[t].setTransform(fcl_transform(T_links[t] @ kit.T_link_fcl[t]))
+            for j, name in enumerate(kit.names):
+                if name.startswith("thumb"):
+                    continue
+                assert pair_distance(kit.moving[t], kit.static[j]) > 0.0, (kit.names[t], name)
+
+
+def random_rigid(rng: np.random.Generator) -> np.ndarray:
+    A = rng.normal(size=(3, 3))
+    Q, R = np.linalg.qr(A)
+    Q *= np.sign(np.diag(R))
+    if np.linalg.det(Q) < 0:
+        Q[:, 0] *= -1
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = Q, rng.uniform(-300, 300, 3)
+    return T
+
+
+def test_grasps_are_invariant_under_a_rigid_motion_of_hand_and_object() -> None:
+    rng = np.random.default_rng(3)
+    T = random_rigid(rng)
+    R, t = T[:3, :3], T[:3, 3]
+    a_obj, b_obj = AnalyticCylinder(), AnalyticCylinder(T_world_cyl=T)
+    a_h = can_hypotheses()
+    b_h = dataclasses.replace(
+        a_h,
+        ray_object=a_h.ray_object @ R.T,
+        target_object=R @ a_h.target_object + t,
+        R_object_palm=np.einsum("ij,njk->nik", R, a_h.R_object_palm),
+    )
+    kit, s = HandKit(build_hand(15, 60)), SimSettings()
+    for i in (0, 101, 333):
+        ga = simulate_thumb(kit, a_obj, simulate_base(kit, a_obj, a_h, i, s), s)
+        gb = simulate_thumb(kit, b_obj, simulate_base(kit, b_obj, b_h, i, s), s)
+        assert np.allclose(T @ ga.T_object_palm, gb.T_object_palm, atol=1e-6)
+        assert np.rad2deg(np.abs(ga.q - gb.q)).max() < 0.5
+        assert ga.contacts.links == gb.contacts.links
+        assert ga.contacts.palmar_links() == gb.contacts.palmar_links()
+
+
+def test_settings_validation_lists_choices() -> None:
+    with pytest.raises(SettingsError, match="sequential"):
+        ClosingSettings(mode="wiggle")  # type: ignore[arg-type]
+    with pytest.raises(SettingsError, match="stop_tol_mm"):
+        ClosingSettings(stop_tol_mm=0)
