@@ -141,7 +141,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         ex = make_executor(args.executor, args.workers, args.address)
         try:
             res = run_sweep([design], names, settings=settings, store=store, executor=ex,
-                            progress=not args.json and sys.stderr.isatty())
+                            progress=not args.json and sys.stderr.isatty(),
+                            gh_stride=args.gh_stride)
         finally:
             ex.close()
     assert res is not None
@@ -180,14 +181,14 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         ex = make_executor(args.executor, args.workers, args.address)
         try:
             res = run_sweep(designs, names, settings=settings, store=store, executor=ex,
-                            chunk=args.chunk)
+                            chunk=args.chunk, gh_stride=args.gh_stride)
         finally:
             ex.close()
     assert res is not None
     rows = [s.to_row(d.cmc_deg, d.mcp_deg) for d, s in zip(res.designs, res.scores, strict=True)]
     names_disp = {k: load_object(k).spec.name for k in names}
     types = {k: load_object(k).spec.grasp_type for k in names}
-    n_gh = {k: len(cached_hypotheses(k)) for k in names}
+    n_gh = {k: len(cached_hypotheses(k).ids[:: args.gh_stride]) for k in names}
     write_table_csv(rows, out / "table.csv", object_keys=names)
     write_table_md(rows, out / "table.md", names_disp, types, n_gh)
     plot_lines(rows, out / "lines.png")
@@ -261,6 +262,9 @@ def build_parser() -> argparse.ArgumentParser:
             s.add_argument("--out", default="out/sweep", help="output folder")
             s.add_argument("--chunk", type=int, default=60, help="hypotheses per task")
         s.add_argument("--object", nargs="+", help="object keys (default: all six)")
+        s.add_argument("--gh-stride", type=int, default=1, metavar="K",
+                       help="preview: only every K-th hypothesis of each object (default 1: "
+                       "all, as published)")
         s.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
         s.add_argument("--executor", choices=("local", "inline", "ray"), default="local",
                        help="local process pool (default), inline, or a Ray cluster")

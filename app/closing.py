@@ -26,7 +26,7 @@ from app.hand.chains import FingerChain
 #: Pairs whose distance lower bound is below this are queried exactly each step (mm).
 EXACT_BELOW_MM = 12.0
 #: Bisection steps refining a stage's stop to the first crossing of gap = stop tolerance.
-BISECT_ITERS = 6
+BISECT_ITERS = 5
 
 _REQ = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
 
@@ -147,42 +147,68 @@ def advance_stage(
         gap = np.linalg.norm(c_link[:, None, :] - sph[None, finite, :3], axis=-1)
         lb[:, finite] = gap - chain.reach[:, None] - sph[None, finite, 3]
     lb[~mask] = np.inf
-    def touching_at(qq: np.ndarray, pairs: np.ndarray) -> tuple[list[int], list[int]]:
-        """Exact distances of the given (k, p) pairs at qq; links within tol (obj, self)."""
+    def evaluate(qq: np.ndarray, full: bool) -> tuple[list[int], list[int]]:
+        """Exact gaps at ``qq`` by lazy evaluation; links within tol (object, self).
+
+        For each moving link, the pair with the smallest lower bound is queried until the
+        smallest bound is an exact distance: that is the link's gap, and every other pair is
+        at least its bound. Pairs with a bound <= tol are all queried (they may touch).
+        ``full=False`` keeps the bounds of the previous configuration (bisection probes,
+        which stay between two configurations already bounded)."""
         T_links = T_object_palm @ chain.link_poses(qq)
+        exact = np.zeros_like(lb, dtype=bool)
         obj_hit: list[int] = []
         self_hit: list[int] = []
-        posed = set()
-        for k, p in pairs:
-            if k not in posed:
-                bodies[k].setTransform(fcl_transform(T_links[k] @ chain.T_link_fcl[k]))
-                posed.add(k)
-            d = pair_distance(bodies[k], obstacles.objs[p])
-            stats.queries += 1
-            lb[k, p] = d
-            if d <= tol:
-                (obj_hit if is_obj[p] else self_hit).append(int(k))
+        for k in moving:
+            posed = False
+            row = lb[k]
+            while True:
+                p = int(np.argmin(row))
+                if not np.isfinite(row[p]) and row[p] > 0:
+                    break  # no pair to check
+                if exact[k, p]:
+                    cand = np.flatnonzero((row <= tol) & ~exact[k])
+                    if len(cand) == 0:
+                        break
+                    p = int(cand[0])
+                if not posed:
+                    bodies[k].setTransform(fcl_transform(T_links[k] @ chain.T_link_fcl[k]))
+                    posed = True
+                d = pair_distance(bodies[k], obstacles.objs[p])
+                stats.queries += 1
+                row[p] = d
+                exact[k, p] = True
+            hit = np.flatnonzero(exact[k] & (row <= tol))
+            if len(hit):
+                if is_obj[hit].any():
+                    obj_hit.append(k)
+                else:
+                    self_hit.append(k)
+        del full
         return obj_hit, self_hit
 
-    q_safe: np.ndarray | None = None  # last q where every checked gap exceeded tol
+    q_safe: np.ndarray | None = None  # last q where every gap exceeded tol
+    lb_safe = lb.copy()
     for _ in range(settings.max_steps):
         stats.steps += 1
-        near = np.argwhere(lb < EXACT_BELOW_MM)
-        near = near[near[:, 0] >= first]
-        touching_obj, touching_self = touching_at(q, near)
+        touching_obj, touching_self = evaluate(q, True)
         if (touching_obj or touching_self) and q_safe is not None:
             # refine the stop to the first crossing of gap = tol between q_safe and q
             lo, hi = q_safe, q
+            lb_hi = lb.copy()
             for _ in range(BISECT_ITERS):
                 mid = 0.5 * (lo + hi)
-                o, s_ = touching_at(mid, near)
+                # bounds at mid: from the safe side, minus the motion from q_safe to mid
+                frac = float(np.max((mid - q_safe) / np.where(v > 0, v, 1.0)))
+                lb[:] = lb_safe - rates_safe[:, None] * frac
+                o, s_ = evaluate(mid, False)
                 if o or s_:
                     hi, touching_obj, touching_self = mid, o, s_
+                    lb_hi = lb.copy()
                 else:
                     lo = mid
             q = hi
-            if not (touching_obj or touching_self):  # hi kept its original verdict
-                touching_obj, touching_self = touching_at(q, near)
+            lb[:] = lb_hi
         if touching_obj:
             return q, StageEvent("contact", tuple(sorted(set(touching_obj))))
         if touching_self:
@@ -197,7 +223,7 @@ def advance_stage(
         with np.errstate(divide="ignore"):
             steps = (gaps - 0.5 * tol) / rates[first:]
         step = min(float(steps.min()), float(room.min()))
-        q_safe = q
+        q_safe, lb_safe, rates_safe = q, lb.copy(), rates
         q = np.minimum(q + v * step, np.where(v > 0, chain.q_upper, q))
         lb -= rates[:, None] * step
     stats.capped += 1

@@ -135,7 +135,7 @@ def draw_contour(
         ax.scatter(c[ok], m[ok], s=18, c="white", edgecolors="k", linewidths=0.6, zorder=3,
                    clip_on=False, label="computed designs")  # fmt: skip
         bc, bm, bv = best_design(c, m, v)
-        ax.scatter([bc], [bm], marker="*", s=320, c="gold", edgecolors="k", zorder=4,
+        ax.scatter([bc], [bm], marker="*", s=360, c="crimson", edgecolors="k", zorder=4,
                    clip_on=False, label="best computed")  # fmt: skip
         right = bc > sum(CMC_RANGE_DEG) / 2  # keep the label inside the axes
         top = bm > sum(MCP_RANGE_DEG) / 2
@@ -155,7 +155,7 @@ def draw_contour(
                 ha="center")  # fmt: skip
     if current is not None:
         ax.scatter([current[0]], [current[1]], marker="o", s=160, facecolors="none",
-                   edgecolors="red", linewidths=2.0, zorder=6, clip_on=False,
+                   edgecolors="deepskyblue", linewidths=2.5, zorder=6, clip_on=False,
                    label="current design")  # fmt: skip
     ax.set_xlim(*CMC_RANGE_DEG)
     ax.set_ylim(*MCP_RANGE_DEG)

@@ -13,6 +13,7 @@ side, toward the default camera). Only this module imports matplotlib; the core 
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -28,9 +29,9 @@ import numpy as np  # noqa: E402
 import trimesh  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
-from mpl_toolkits.mplot3d import Axes3D  # noqa: E402
+from mpl_toolkits.mplot3d import Axes3D, proj3d  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection  # noqa: E402
-from scipy.spatial import cKDTree  # noqa: E402
+from scipy.spatial import KDTree  # noqa: E402
 
 from app.contact_set import ContactSet, finger_of  # noqa: E402
 from app.hand.geometry import VISUAL_INSET, BoxShape, CapsuleShape  # noqa: E402
@@ -44,9 +45,9 @@ if TYPE_CHECKING:
 #: Base colours (RGB in [0, 1]) before shading.
 PALM_RGB = np.array([0.93, 0.76, 0.63])
 FINGER_RGB = {  # proximal, middle, distal: a slight gradient so the joints read
-    "proximal": np.array([0.90, 0.72, 0.59]),
+    "proximal": np.array([0.88, 0.70, 0.57]),
     "middle": np.array([0.92, 0.75, 0.62]),
-    "distal": np.array([0.94, 0.78, 0.66]),
+    "distal": np.array([0.96, 0.80, 0.68]),
 }
 THUMB_RGB = {
     "thumb_metacarpal": np.array([0.86, 0.58, 0.48]),
@@ -67,6 +68,9 @@ SHININESS = 24.0
 
 #: Camera (elevation, azimuth) in degrees for the hand alone (upright palm-frame display).
 HAND_VIEW = (18.0, -62.0)
+#: Camera of the design grid: from the palmar, radial and distal side, so the thumb's
+#: opposition shows.
+GRID_VIEW = (30.0, -38.0)
 #: Default cameras for the shipped objects with the hand at roll 0 (object frame, +z up).
 OBJECT_VIEWS: dict[str, tuple[float, float]] = {
     "small_marker": (18.0, -75.0),
@@ -78,7 +82,7 @@ OBJECT_VIEWS: dict[str, tuple[float, float]] = {
 }
 #: The thumb posture of the design grid: CMC, MCP, IP (degrees), long fingers slightly bent.
 GRID_THUMB_DEG = (60.0, 40.0, 30.0)
-GRID_FINGER_DEG = (15.0, 15.0, 10.0)
+GRID_FINGER_DEG = (10.0, 10.0, 5.0)
 DEFAULT_DESIGNS: tuple[tuple[float, float], ...] = (
     (0, 0),
     (0, 45),
@@ -94,8 +98,17 @@ R_DISPLAY_PALM = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 #: Longest triangle edge (mm) drawn: long slivers (a capsule's side, a can's wall) are split
 #: so that depth sorting across meshes stays right.
 MAX_EDGE_MM = 7.0
+#: Longest edge (mm) of the triangles where one link enters another (a finger into the palm).
+JUNCTION_EDGE_MM = 1.5
+#: Object triangles are refined to edges of at most max(MAX_EDGE_MM, size / this).
+OBJECT_EDGE_DIVISIONS = 20.0
+#: Mesh detail of the design grid's small pictures (edges 1/GRID_DETAIL times longer).
+GRID_DETAIL = 0.5
 #: Sampling spacing (mm) of the link surfaces when the hand is moved to first contact.
 CLEARANCE_SPACING_MM = 2.5
+#: First-contact search: distance counted as contact, and the smallest sphere-tracing step.
+CONTACT_TOL_MM = 0.2
+MIN_STEP_MM = 1.5
 
 
 @dataclass(frozen=True)
@@ -164,27 +177,33 @@ def _refine(tris: np.ndarray, max_edge: float) -> np.ndarray:
     return np.concatenate(done) if done else np.zeros((0, 3, 3))
 
 
-_REFINED: dict[int, tuple[trimesh.Trimesh, np.ndarray, np.ndarray]] = {}
+_REFINED: dict[tuple[int, float], tuple[trimesh.Trimesh, np.ndarray, np.ndarray]] = {}
 
 
-def _render_tris(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
+def _render_tris(
+    mesh: trimesh.Trimesh, max_edge: float = MAX_EDGE_MM
+) -> tuple[np.ndarray, np.ndarray]:
     """Refined triangles and their unit normals of a mesh in its own frame (cached)."""
-    hit = _REFINED.get(id(mesh))
+    hit = _REFINED.get((id(mesh), max_edge))
     if hit is not None and hit[0] is mesh:
         return hit[1], hit[2]
-    tris = _refine(np.asarray(mesh.vertices, float)[np.asarray(mesh.faces)], MAX_EDGE_MM)
-    n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
-    norm = np.linalg.norm(n, axis=1)
-    keep = norm > 1e-12
-    tris, n = tris[keep], n[keep] / norm[keep, None]
+    tris = _refine(np.asarray(mesh.vertices, float)[np.asarray(mesh.faces)], max_edge)
+    area2 = np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]), axis=1)
+    tris = tris[area2 > 1e-12]  # drop degenerate triangles
+    n = _face_normals(tris)
     if len(_REFINED) > 64:
         _REFINED.clear()
-    _REFINED[id(mesh)] = (mesh, tris, n)
+    _REFINED[(id(mesh), max_edge)] = (mesh, tris, n)
     return tris, n
 
 
-def _part(mesh: trimesh.Trimesh, T_display_mesh: np.ndarray, rgb: np.ndarray) -> _Part:
-    tris, n = _render_tris(mesh)
+def _part(
+    mesh: trimesh.Trimesh,
+    T_display_mesh: np.ndarray,
+    rgb: np.ndarray,
+    max_edge: float = MAX_EDGE_MM,
+) -> _Part:
+    tris, n = _render_tris(mesh, max_edge)
     R, t = T_display_mesh[:3, :3], T_display_mesh[:3, 3]
     return _Part(tris @ R.T + t, n @ R.T, rgb)
 
@@ -205,7 +224,9 @@ def _inside_shape(shape: CapsuleShape | BoxShape, p: np.ndarray, margin: float) 
     return sd < -margin
 
 
-def _hand_parts(hand: Hand, q: np.ndarray, T_display_palm: np.ndarray) -> list[_Part]:
+def _hand_parts(
+    hand: Hand, q: np.ndarray, T_display_palm: np.ndarray, detail: float = 1.0
+) -> list[_Part]:
     """Posed, refined link meshes without the triangles buried inside another link (the
     capsule ends overlap at the joints and inside the palm; drawing them would confuse the
     painter's algorithm)."""
@@ -214,16 +235,39 @@ def _hand_parts(hand: Hand, q: np.ndarray, T_display_palm: np.ndarray) -> list[_
     inv = np.linalg.inv(poses)
     parts = []
     for i, lk in enumerate(hand.links):
-        tris, n = _render_tris(meshes[lk.name])
-        c_palm = _transform(poses[i], tris.mean(axis=1))
-        buried = np.zeros(len(tris), bool)
-        for j, other in enumerate(hand.links):
-            if j != i:
-                buried |= _inside_shape(other.shape, _transform(inv[j], c_palm), 0.05)
+        tris, n = _render_tris(meshes[lk.name], MAX_EDGE_MM / detail)
+        others = [j for j in range(len(hand.links)) if j != i]
+
+        def corners_inside(t: np.ndarray, i: int = i, others: list[int] = others) -> np.ndarray:
+            v_palm = _transform(poses[i], t.reshape(-1, 3))
+            inside = np.zeros(len(v_palm), bool)
+            for j in others:
+                inside |= _inside_shape(hand.links[j].shape, _transform(inv[j], v_palm), 0.0)
+            return inside.reshape(-1, 3)
+
+        inside = corners_inside(tris)
+        straddle = inside.any(axis=1) & ~inside.all(axis=1)
+        if straddle.any():  # refine where a link enters another, then drop the buried bits
+            fine = _refine(tris[straddle], JUNCTION_EDGE_MM / detail)
+            fine_n = _face_normals(fine)
+            keep = ~inside.any(axis=1)
+            fine_keep = ~corners_inside(fine).all(axis=1)
+            tris = np.concatenate([tris[keep], fine[fine_keep]])
+            n = np.concatenate([n[keep], fine_n[fine_keep]])
+        else:
+            keep = ~inside.all(axis=1)
+            tris, n = tris[keep], n[keep]
         T = T_display_palm @ poses[i]
         R, t = T[:3, :3], T[:3, 3]
-        parts.append(_Part(tris[~buried] @ R.T + t, n[~buried] @ R.T, _link_rgb(lk.name)))
+        parts.append(_Part(tris @ R.T + t, n @ R.T, _link_rgb(lk.name)))
     return parts
+
+
+def _face_normals(tris: np.ndarray) -> np.ndarray:
+    """Unit normals (F, 3) of triangles (F, 3, 3) (right-hand rule)."""
+    n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    norm = np.linalg.norm(n, axis=1, keepdims=True)
+    return n / np.where(norm > 1e-12, norm, 1.0)
 
 
 def _camera(view: tuple[float, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -231,6 +275,8 @@ def _camera(view: tuple[float, float]) -> tuple[np.ndarray, np.ndarray, np.ndarr
     el, az = np.deg2rad(view[0]), np.deg2rad(view[1])
     eye = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
     right = np.cross([0.0, 0.0, 1.0], eye)
+    if np.linalg.norm(right) < 1e-9:  # looking straight down or up
+        right = np.array([-np.sin(az), np.cos(az), 0.0])
     right /= np.linalg.norm(right)
     up = np.cross(eye, right)
     return eye, right, up
@@ -265,29 +311,66 @@ def _new_axes(fig: Figure, *args: Any) -> Axes3D:
     ax.set_proj_type("ortho")
     ax.computed_zorder = False  # overlays (axes, contacts) stay on top of the meshes
     ax.set_axis_off()
+    ax.patch.set_alpha(0.0)  # axes squares may overlap their neighbours' cells
     return ax
 
 
-def _frame_limits(ax: Axes3D, pts: np.ndarray, margin: float = 0.04, zoom: float = 1.0) -> None:
+def _set_limits(ax: Axes3D, pts: np.ndarray) -> tuple[float, float, float]:
+    """Equal-aspect data box around ``pts`` (a cube-free box: set_box_aspect from ranges)."""
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     span = np.maximum(hi - lo, 1e-3)
-    pad = margin * span.max()
+    pad = 0.02 * span.max()
     lo, hi = lo - pad, hi + pad
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_zlim(lo[2], hi[2])
-    ax.set_box_aspect(tuple(hi - lo), zoom=zoom)
+    box = (float(hi[0] - lo[0]), float(hi[1] - lo[1]), float(hi[2] - lo[2]))
+    ax.set_box_aspect(box, zoom=1)
+    return box
+
+
+def _fit(ax: Axes3D, pts: np.ndarray, target: tuple[float, float, float, float]) -> None:
+    """Zoom and move the 3-D axes so that the projection of ``pts`` fills ``target``
+    (x0, y0, x1, y1, figure pixels) and is centred in it. The orthographic projection is
+    linear about the axes centre, so one measurement is enough."""
+    fig = ax.get_figure(root=True)
+    assert fig is not None
+    W, H = fig.get_size_inches() * fig.dpi
+    x0, y0, x1, y1 = target
+    side = max(x1 - x0, y1 - y0)  # a square axes (Axes3D is always square) over the target
+    cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+    ax.set_position((float((cx - side / 2) / W), float((cy - side / 2) / H), side / W, side / H))
+    ax.apply_aspect()
+    box = _set_limits(ax, pts)
+    xs, ys, _ = proj3d.proj_transform(pts[:, 0], pts[:, 1], pts[:, 2], ax.get_proj())
+    d = ax.transData.transform(np.column_stack([xs, ys]))
+    centre = ax.transAxes.transform((0.5, 0.5))
+    lo, hi = d.min(axis=0), d.max(axis=0)
+    f = min((x1 - x0) / max(hi[0] - lo[0], 1e-6), (y1 - y0) / max(hi[1] - lo[1], 1e-6))
+    ax.set_box_aspect(box, zoom=f)  # pyright: ignore[reportArgumentType]  (stub says int)
+    now = centre + f * (0.5 * (lo + hi) - centre)  # content centre after the zoom
+    shift = np.array([cx, cy]) - now
+    pos = ax.get_position()
+    ax.set_position((pos.x0 + shift[0] / W, pos.y0 + shift[1] / H, pos.width, pos.height))
 
 
 def _draw_meshes(ax: Axes3D, parts: Sequence[_Part], view: tuple[float, float]) -> int:
     tris, rgba = _shaded_polys(parts, view)
-    coll = Poly3DCollection(
-        list(tris), facecolors=rgba, edgecolors=rgba, linewidths=0.6, zorder=1
-    )
+    coll = Poly3DCollection(list(tris), facecolors=rgba, edgecolors=rgba, linewidths=0.6, zorder=1)
     coll.set_zsort("average")
     ax.add_collection3d(coll)
     ax.view_init(elev=view[0], azim=view[1])
     return len(tris)
+
+
+def _arrow(ax: Axes3D, tail: np.ndarray, vec: np.ndarray, **kw: Any) -> None:
+    x, y, z = (float(c) for c in tail)
+    u, v, w = (float(c) for c in vec)
+    ax.quiver(x, y, z, u, v, w, **kw)
+
+
+def _text(ax: Axes3D, p: np.ndarray, s: str, **kw: Any) -> None:
+    ax.text(float(p[0]), float(p[1]), float(p[2]), s, **kw)
 
 
 def _draw_joint_axes(
@@ -304,21 +387,21 @@ def _draw_joint_axes(
             length = 0.16 * scale
             tail = p[j] - 0.45 * length * a[j]
             vec = 1.45 * length * a[j]
-            ax.quiver(
-                *tail, *vec, color=THUMB_AXIS_RGB[name], linewidth=2.6,
+            _arrow(
+                ax, tail, vec, color=THUMB_AXIS_RGB[name], linewidth=2.6,
                 arrow_length_ratio=0.22, zorder=10,
             )  # fmt: skip
             tip = tail + vec
-            ax.text(
-                *(tip + 0.03 * scale * a[j]), name, color=THUMB_AXIS_RGB[name],
+            _text(
+                ax, tip + 0.03 * scale * a[j], name, color=THUMB_AXIS_RGB[name],
                 fontsize=11, fontweight="bold", zorder=11,
             )  # fmt: skip
-            ends += [tail, tip]
+            ends += [tail, tip, tip + 0.08 * scale * a[j]]
         else:
             length = 0.09 * scale
             tail = p[j] - 0.5 * length * a[j]
-            ax.quiver(
-                *tail, *(length * a[j]), color="#444444", linewidth=0.9, alpha=0.6,
+            _arrow(
+                ax, tail, length * a[j], color="#444444", linewidth=0.9, alpha=0.6,
                 arrow_length_ratio=0.3, zorder=9,
             )  # fmt: skip
             ends += [tail, tail + length * a[j]]
@@ -351,16 +434,25 @@ def _draw_contacts(
             continue
         col = CONTACT_RGB[kind]
         ax.scatter(
-            p[sel, 0], p[sel, 1], p[sel, 2], s=14, c=col, depthshade=False,
+            p[sel, 0], p[sel, 1], p[sel, 2], s=36, c=col, depthshade=False,
             edgecolors="black", linewidths=0.3, zorder=12,
         )  # fmt: skip
         segs = np.stack([p[sel], p[sel] + nlen * n[sel]], axis=1)
-        ax.add_collection3d(Line3DCollection(list(segs), colors=col, linewidths=1.0, zorder=12))
+        ax.add_collection3d(Line3DCollection(list(segs), colors=col, linewidths=1.6, zorder=12))
         handles.append(
             Line2D([], [], marker="o", linestyle="-", color=col, markeredgecolor="black",
                    markeredgewidth=0.3, label=labels[kind])
         )  # fmt: skip
-    ax.legend(handles=handles, loc="upper right", fontsize=9, framealpha=0.85)
+    # a figure legend: the square 3-D axes may reach outside the figure, its corner too
+    fig = ax.get_figure(root=True)
+    assert fig is not None
+    fig.legend(
+        handles=handles,
+        loc="upper right",
+        bbox_to_anchor=(0.99, 0.93),
+        fontsize=10,
+        framealpha=0.9,
+    )
     return tuple(h.get_label() for h in handles)
 
 
@@ -382,16 +474,14 @@ def _draw_frame_triad(
     ends = [o]
     for k, (lab, col) in enumerate(zip("xyz", ("#c0392b", "#27ae60", "#2e6fd8"), strict=True)):
         d = R_display_frame[:, k] * length
-        ax.quiver(*o, *d, color=col, linewidth=1.4, arrow_length_ratio=0.25, zorder=8)
-        ax.text(*(o + 1.18 * d), lab, color=col, fontsize=9, zorder=8)
+        _arrow(ax, o, d, color=col, linewidth=1.4, arrow_length_ratio=0.25, zorder=8)
+        _text(ax, o + 1.18 * d, lab, color=col, fontsize=9, zorder=8)
         ends.append(o + 1.2 * d)
-    ax.text(*(o - 0.35 * length * up), f"{name} frame", color="#555555", fontsize=8, zorder=8)
+    _text(ax, o - 0.35 * length * up, f"{name} frame", color="#555555", fontsize=8, zorder=8)
     return np.array(ends)
 
 
-def _tube_parts(
-    target: np.ndarray, end: np.ndarray, radius: float, rgb: np.ndarray
-) -> list[_Part]:
+def _tube_parts(target: np.ndarray, end: np.ndarray, radius: float, rgb: np.ndarray) -> list[_Part]:
     """The approach ray as a thin tube with a ball at the target: part of the depth-sorted
     meshes, so the hand and the object hide it where they are in front of it."""
     meshes = [trimesh.creation.icosphere(subdivisions=2, radius=2.4 * radius)]
@@ -417,7 +507,7 @@ def _ray_length(t: np.ndarray, d: np.ndarray, hand_parts: Sequence[_Part], scale
     if not hand_parts:
         return 0.6 * scale
     v = np.concatenate([p.tris.reshape(-1, 3) for p in hand_parts])
-    tree = cKDTree(v)
+    tree = KDTree(v)
     s = np.arange(0.0, 1.5 * scale, 1.0)
     dist, _ = tree.query(t + s[:, None] * d)
     hit = np.nonzero(dist < 0.6 * MAX_EDGE_MM)[0]
@@ -437,9 +527,11 @@ def _draw_scene(
     show_frame: bool,
     view: tuple[float, float],
     approach_ray: tuple[np.ndarray, np.ndarray] | None = None,
-    zoom: float = 1.0,
+    target: tuple[float, float, float, float],
+    detail: float = 1.0,
 ) -> tuple[int, tuple[str, ...]]:
-    """Draw one scene on ``ax``; returns (polygons drawn, legend labels)."""
+    """Draw one scene on ``ax`` fitted into ``target`` (x0, y0, x1, y1, figure pixels);
+    returns (polygons drawn, legend labels)."""
     if obj is not None:
         T_display_frame = np.eye(4)  # the object frame, +z already up
         T_frame_palm = np.eye(4) if T_object_palm is None else np.asarray(T_object_palm, float)
@@ -450,21 +542,25 @@ def _draw_scene(
         T_frame_palm = np.eye(4)
         frame_name = "palm"
     T_display_palm = T_display_frame @ T_frame_palm
-    obj_parts = [] if obj is None else [_part(obj.mesh, T_display_frame, OBJECT_RGB)]
+    obj_parts = []
+    if obj is not None:
+        extent = float(np.ptp(np.asarray(obj.mesh.vertices), axis=0).max())
+        edge = max(MAX_EDGE_MM, extent / OBJECT_EDGE_DIVISIONS) / detail
+        obj_parts = [_part(obj.mesh, T_display_frame, OBJECT_RGB, edge)]
     hand_parts: list[_Part] = []
     q_ = None
     if hand is not None:
         q_ = hand.q_open if q is None else np.asarray(q, float)
-        hand_parts = _hand_parts(hand, q_, T_display_palm)
+        hand_parts = _hand_parts(hand, q_, T_display_palm, detail)
     parts = obj_parts + hand_parts
     if not parts:
         raise ValueError("render_scene needs a hand, an object, or both")
     pts = [np.concatenate([p.tris.reshape(-1, 3) for p in parts])]
     scale = float(np.ptp(pts[0], axis=0).max())
     if approach_ray is not None:
-        target, direction = (np.asarray(v, float) for v in approach_ray)
-        t = _transform(T_display_frame, target[None])[0]
-        d = T_display_frame[:3, :3] @ direction
+        ray_o, ray_d = (np.asarray(v, float) for v in approach_ray)
+        t = _transform(T_display_frame, ray_o[None])[0]
+        d = T_display_frame[:3, :3] @ ray_d
         d = d / np.linalg.norm(d)
         end = t + d * _ray_length(t, d, hand_parts, scale)
         parts += _tube_parts(t, end, 0.005 * scale, RAY_RGB)
@@ -483,7 +579,9 @@ def _draw_scene(
     labels: tuple[str, ...] = ()
     if contacts is not None:
         labels = _draw_contacts(ax, contacts, T_display_frame, scale)
-    _frame_limits(ax, np.concatenate(pts), zoom=zoom)
+    _fit(ax, np.concatenate(pts), target)
+    for artist in [*ax.collections, *ax.lines, *ax.texts]:
+        artist.set_clip_on(False)  # the content may overhang the (square) 3-D axes
     return n_poly, labels
 
 
@@ -516,7 +614,8 @@ def render_scene(
         view = OBJECT_VIEWS.get(obj.key, (20.0, -40.0)) if obj is not None else HAND_VIEW
     fig = plt.figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
     ax = _new_axes(fig, 1, 1, 1)
-    fig.subplots_adjust(left=0, right=1, bottom=0, top=0.94 if title else 1)
+    m = 0.04 * min(size)
+    target = (m, m, size[0] - m, size[1] - m - (0.06 * size[1] if title else 0.0))
     n_poly, labels = _draw_scene(
         ax,
         hand=hand,
@@ -528,7 +627,7 @@ def render_scene(
         show_frame=show_frame,
         view=view,
         approach_ray=approach_ray,
-        zoom=1.3,
+        target=target,
     )
     if title:
         fig.suptitle(title, fontsize=13)
@@ -594,14 +693,27 @@ def roll0_pose(
 
     reach = float(np.ptp(p_palm, axis=0).max()) + 2.0 * obj.max_radius
     s = reach
-    for _ in range(300):  # sphere tracing: the SDF is 1-Lipschitz, each step is safe
+    for _ in range(500):  # sphere tracing: the SDF is 1-Lipschitz, a step of d is safe
         d = min_dist(s)
-        if d < 0.2:
+        if d < CONTACT_TOL_MM:
             break
-        s -= d
-        if s < -reach:  # the hand never meets the object along the ray
-            s = 0.0
-            break
+        if d >= MIN_STEP_MM:
+            s -= d
+            continue
+        # grazing: a fixed small step, then bisect back to the first contact
+        lo, hi = s - MIN_STEP_MM, s
+        if min_dist(lo) >= CONTACT_TOL_MM:
+            s = lo
+            continue
+        while hi - lo > CONTACT_TOL_MM:
+            mid = 0.5 * (lo + hi)
+            lo, hi = (lo, mid) if min_dist(mid) < CONTACT_TOL_MM else (mid, hi)
+        s = hi
+        break
+    else:
+        s = 0.0
+    if s < -reach:  # the hand never meets the object along the ray
+        s = 0.0
     if standoff_mm is None:
         standoff_mm = float(min(spec.setup.standoffs_mm))
     s += standoff_mm
@@ -632,6 +744,7 @@ def render_object(
     """
     from app.objects import load_object
 
+    t0 = time.perf_counter()
     obj = load_object(key)
     hand = build_hand(cmc_deg, mcp_deg, cmc_tilt=cmc_tilt) if with_hand else None
     T = roll0_pose(hand, obj, standoff_mm=standoff_mm) if hand is not None else None
@@ -640,7 +753,7 @@ def render_object(
         if hand is not None:
             d = float(min(obj.spec.setup.standoffs_mm)) if standoff_mm is None else standoff_mm
             title += f": hand c = {cmc_deg:g}°, m = {mcp_deg:g}° at roll 0, axis ray, δ = {d:g} mm"
-    return render_scene(
+    info = render_scene(
         path,
         hand=hand,
         T_object_palm=T,
@@ -652,6 +765,7 @@ def render_object(
         size=size,
         view=view,
     )
+    return dataclasses.replace(info, seconds=time.perf_counter() - t0)
 
 
 def grid_pose(hand: Hand) -> np.ndarray:
@@ -683,13 +797,18 @@ def render_design_grid(
     if size is None:
         size = (400 * ncols, 420 * nrows)
     dpi = 100
-    view = HAND_VIEW if view is None else view
+    view = GRID_VIEW if view is None else view
     fig = plt.figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
-    fig.subplots_adjust(left=0, right=1, bottom=0, top=0.92 if title else 0.97, wspace=0, hspace=0.05)
+    top = size[1] - (50.0 if title else 0.0)
+    cell_w, cell_h = size[0] / ncols, top / nrows
     n_poly = 0
     for i, (c, m) in enumerate(designs):
         hand = build_hand(c, m)
         ax = _new_axes(fig, nrows, ncols, i + 1)
+        r, c_ = divmod(i, ncols)
+        x0, y1 = c_ * cell_w, top - r * cell_h
+        pad = 0.05 * min(cell_w, cell_h)
+        target = (x0 + pad, y1 - cell_h + pad, x0 + cell_w - pad, y1 - pad - 28.0)
         qi = grid_pose(hand) if q is None else np.asarray(q, float)
         k, _ = _draw_scene(
             ax,
@@ -701,10 +820,14 @@ def render_design_grid(
             show_axes=show_axes,
             show_frame=False,
             view=view,
-            zoom=1.2,
+            target=target,
+            detail=GRID_DETAIL,
         )
         n_poly += k
-        ax.set_title(f"c = {c:g}°, m = {m:g}°", fontsize=12, y=0.98)
+        fig.text(
+            (x0 + cell_w / 2) / size[0], (y1 - 8.0) / size[1], f"c = {c:g}°, m = {m:g}°",
+            ha="center", va="top", fontsize=12,
+        )  # fmt: skip
     if title:
         fig.suptitle(title, fontsize=13)
     out = _save(fig, path, dpi)

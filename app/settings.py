@@ -13,6 +13,10 @@ from app.contacts import ContactSettings
 from app.force_closure import FCSettings
 from app.grasp_type import GraspTypeSettings
 
+#: Bumped whenever a code change alters simulated outcomes: part of the settings key, so a
+#: store never serves results of an older engine as current.
+ENGINE_VERSION = 2
+
 
 @dataclass(frozen=True)
 class SimSettings:
@@ -44,4 +48,4 @@ class SimSettings:
         """Stable hash of all settings (store key)."""
         from app.store import stable_hash
 
-        return stable_hash(self.as_dict())
+        return stable_hash({"engine_version": ENGINE_VERSION, **self.as_dict()})

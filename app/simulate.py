@@ -1,11 +1,12 @@
 """Simulate grasp hypotheses: the design-independent base stage, then the thumb stage.
 
-Cost model (METHOD §3a; docs/cost-model.md): the approach, the back-off and the long
-fingers' closing depend on the object, the hypothesis and the palm only, so ``simulate_base``
-runs once per hypothesis and its ``BaseGrasp`` serves every thumb design. The thumb is
-excluded from the approach (a decision: it keeps the placement independent of the thumb
-design) and closes last, against the object and, for self-collision, against the palm and
-the long fingers in their final posture. Only ``simulate_thumb`` runs per design.
+Cost model (METHOD §3a; docs/cost-model.md): the approach stops at the first contact of
+the open hand, thumb included, and the open thumb's shape depends on the CMC angle c only
+(at q = 0 the MCP design angle m turns the thumb's capsules about their own axes). So the
+approach, the back-off and the long fingers' closing (``simulate_base``) run once per
+(hypothesis, c) and serve all MCP angles; the thumb closes last (``simulate_thumb``, per
+design), against the object and, for self-collision, the palm and the long fingers in their
+final posture.
 """
 
 from __future__ import annotations
@@ -38,8 +39,8 @@ class HandKit:
         self.q_open = hand.q_open
         self.reach = np.array([_reach(sh) for sh in self.shapes])
         T_open = hand.link_poses(self.q_open)
-        # approach bodies: palm + long-finger links, open
-        self.approach_idx = [0] + [i for i, n in enumerate(self.names) if n.split("_")[0] in LONG_FINGERS]
+        # approach bodies: every link of the open hand (the thumb too)
+        self.approach_idx = list(range(len(self.names)))
         self.T_palm_approach = np.stack([T_open[i] @ self.T_link_fcl[i] for i in self.approach_idx])
 
     def bodies(self, finger: str) -> list[fcl.CollisionObject]:
@@ -95,8 +96,13 @@ def simulate_base(
     i: int,
     settings: SimSettings,
     stats: ClosingStats | None = None,
+    fingers: tuple[str, ...] | None = None,
 ) -> BaseGrasp:
-    """Approach, back off by the standoff, close the long fingers; contacts of palm + fingers."""
+    """Approach, back off by the standoff, close the long fingers; contacts of palm + fingers.
+
+    ``fingers``: the fingers that close (default ``closing_fingers`` of the object's grasp
+    type; the brute-force set closes all). The thumb, if listed, is left to ``simulate_thumb``.
+    """
     closing = settings.closing
     stats = stats if stats is not None else ClosingStats()
     pieces = obj.collision_objects()  # type: ignore[attr-defined]
@@ -127,7 +133,7 @@ def simulate_base(
     s += float(hyps.standoff_mm[i])
     T[:3, 3] = hyps.target_object + s * ray - R @ kit.hand.approach_point_palm
     obstacles = Obstacles(list(pieces), len(pieces))
-    for finger in closing_fingers(spec.grasp_type):
+    for finger in fingers if fingers is not None else closing_fingers(spec.grasp_type):
         if finger == "thumb":
             continue
         ch = kit.chains[finger]

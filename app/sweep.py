@@ -1,8 +1,8 @@
 """Run designs × objects × hypotheses, resumably, in parallel; aggregate S_GAS.
 
 Work unit (a *task*): one object, a chunk of its hypotheses, and the designs that still lack
-results for them. A worker computes each hypothesis' ``BaseGrasp`` once and then closes the
-thumb of every listed design on it (the cost model of docs/cost-model.md). The parent
+results for them. A worker computes each hypothesis' ``BaseGrasp`` once per CMC angle and
+then closes the thumb of every listed design on it (the cost model of docs/cost-model.md). The parent
 process is the only writer of the results store: one transaction per finished task, so a
 killed sweep loses at most the tasks in flight and never leaves half a task behind.
 """
@@ -15,10 +15,12 @@ import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from multiprocessing import get_context
 
+from app.bruteforce import ALL_FINGERS, BF_SETS, BruteForceHypotheses, bf_store_suffix
+from app.bruteforce import brute_force_hypotheses as _bf_hypotheses
 from app.design import ThumbDesign
 from app.hand.data import load_hand_dims
 from app.hand.model import Hand
@@ -27,7 +29,7 @@ from app.judge import judge
 from app.objects import OBJECT_KEYS, load_object
 from app.scores import DesignScore, ObjectScore
 from app.settings import SimSettings
-from app.simulate import HandKit, simulate_base, simulate_thumb
+from app.simulate import BaseGrasp, HandKit, simulate_base, simulate_thumb
 from app.store import GraspOutcome, ResultStore, stable_hash
 
 #: Hypotheses per task: small enough for a live progress bar, large enough to amortise.
@@ -64,6 +66,37 @@ def cached_hypotheses(key: str) -> Hypotheses:
     return hypotheses_for(load_object(key))
 
 
+#: Hypothesis sets: the benchmark's (METHOD §3a) and the brute-force ones (§3b).
+HYPOTHESIS_SETS: tuple[str, ...] = ("anthropomorphic", *BF_SETS)
+
+
+def _check_set(hypothesis_set: str) -> None:
+    if hypothesis_set not in HYPOTHESIS_SETS:
+        from app.errors import SettingsError
+
+        raise SettingsError(
+            f"unknown hypothesis set {hypothesis_set!r}; choose one of {HYPOTHESIS_SETS}"
+        )
+
+
+@lru_cache(maxsize=32)
+def hypotheses_of(key: str, hypothesis_set: str = "anthropomorphic") -> Hypotheses:
+    """The hypotheses of an object in a set of ``HYPOTHESIS_SETS`` (per process)."""
+    _check_set(hypothesis_set)
+    if hypothesis_set == "anthropomorphic":
+        return cached_hypotheses(key)
+    return _bf_hypotheses(load_object(key), BF_SETS[hypothesis_set])
+
+
+def set_object_key(key: str, hypothesis_set: str = "anthropomorphic") -> str:
+    """Store object key of an object's hypothesis set: ``object_key`` for the benchmark,
+    with a suffix (``':bf'``) for a brute-force set, so the two never mix."""
+    _check_set(hypothesis_set)
+    if hypothesis_set == "anthropomorphic":
+        return object_key(key)
+    return object_key(key) + bf_store_suffix(BF_SETS[hypothesis_set])
+
+
 @lru_cache(maxsize=64)
 def _kit(cmc_deg: float, mcp_deg: float, tilt: str) -> HandKit:
     return HandKit(Hand(ThumbDesign(cmc_deg, mcp_deg, tilt), load_hand_dims()))  # type: ignore[arg-type]
@@ -81,21 +114,34 @@ class Task:
     """Designs to evaluate on every listed hypothesis."""
     settings: SimSettings
     """Simulation settings."""
+    hypothesis_set: str = "anthropomorphic"
+    """One of ``HYPOTHESIS_SETS``."""
 
 
 def run_task(task: Task) -> list[tuple[int, str, GraspOutcome]]:
-    """Simulate one task; returns (design index in task, GH id, outcome) triples."""
+    """Simulate one task; returns (design index in task, GH id, outcome) triples.
+
+    Brute-force sets close all fingers, and their outcomes keep the hand placement in
+    ``extra["T_object_palm"]`` (4×4 nested list, mm) for the GQMs and pictures.
+    """
     obj = load_object(task.object_name)
-    hyps = cached_hypotheses(task.object_name)
+    hyps = hypotheses_of(task.object_name, task.hypothesis_set)
     s = task.settings
     base_kit = _kit(*task.designs[0].as_dict().values())  # type: ignore[arg-type]
     kits = [_kit(*d.as_dict().values()) for d in task.designs]  # type: ignore[arg-type]
     out: list[tuple[int, str, GraspOutcome]] = []
+    bf = isinstance(hyps, BruteForceHypotheses)
     for i in task.gh:
-        base = simulate_base(base_kit, obj, hyps, i, s)
+        if isinstance(hyps, BruteForceHypotheses):
+            base = simulate_base(base_kit, obj, hyps.approach_line(i), i, s, fingers=ALL_FINGERS)
+        else:
+            base = simulate_base(base_kit, obj, hyps, i, s)
         for di, kit in enumerate(kits):
             g = simulate_thumb(kit, obj, base, s)
-            out.append((di, hyps.ids[i], judge(g, obj, s, base.queries + g.queries)))
+            o = judge(g, obj, s, base.queries + g.queries)
+            if bf:
+                o = replace(o, extra={**o.extra, "T_object_palm": g.T_object_palm.tolist()})
+            out.append((di, hyps.ids[i], o))
     return out
 
 
@@ -225,8 +271,9 @@ def plan_tasks(
     object_names: Sequence[str],
     settings: SimSettings,
     chunk: int = DEFAULT_CHUNK,
+    gh_stride: int = 1,
 ) -> list[Task]:
-    """Tasks for every (design, object, GH) not yet in the store."""
+    """Tasks for every (design, object, GH) not yet in the store (every ``gh_stride``-th GH)."""
     skey = settings.key()
     dkeys = [design_key(d) for d in designs]
     tasks: list[Task] = []
@@ -234,8 +281,9 @@ def plan_tasks(
         hyps = cached_hypotheses(name)
         okey = object_key(name)
         present = [store.present_ids(dk, okey, skey) for dk in dkeys]
-        for start in range(0, len(hyps), chunk):
-            idx = range(start, min(start + chunk, len(hyps)))
+        subset = list(range(0, len(hyps), gh_stride))
+        for start in range(0, len(subset), chunk):
+            idx = subset[start : start + chunk]
             # group designs by which of these GHs they lack (usually: all or none)
             groups: dict[tuple[int, ...], list[ThumbDesign]] = {}
             for d, have in zip(designs, present, strict=True):
@@ -257,12 +305,18 @@ def run_sweep(
     chunk: int = DEFAULT_CHUNK,
     progress: bool | Callable[[int, int], None] = True,
     cancel: threading.Event | None = None,
+    gh_stride: int = 1,
 ) -> SweepResult | None:
     """Evaluate every design on every object; resumes from and writes to ``store``.
 
     Returns None when cancelled. ``progress`` is True (terminal bar), False, or a callback
-    ``(done, total)``.
+    ``(done, total)``. ``gh_stride`` > 1 previews on every k-th hypothesis of each object
+    (scores are then over that subset: the published numbers need ``gh_stride=1``).
     """
+    if gh_stride < 1:
+        from app.errors import SettingsError
+
+        raise SettingsError(f"gh_stride must be >= 1, got {gh_stride}")
     t0 = time.perf_counter()
     settings = settings or SimSettings()
     skey = settings.key()
@@ -271,7 +325,7 @@ def run_sweep(
         store.put_design_meta(design_key(d), d.as_dict())
     for name in object_names:
         store.put_object_meta(object_key(name), {"key": name})
-    tasks = plan_tasks(store, designs, object_names, settings, chunk)
+    tasks = plan_tasks(store, designs, object_names, settings, chunk, gh_stride)
     total = sum(len(t.gh) * len(t.designs) for t in tasks)
     bar = Progress(total) if progress is True and total else None
     own = executor is None
@@ -298,20 +352,32 @@ def run_sweep(
             executor.close()
     if cancel is not None and cancel.is_set():
         return None
-    scores = [score_design(store, d, object_names, settings) for d in designs]
+    scores = [score_design(store, d, object_names, settings, gh_stride) for d in designs]
     return SweepResult(list(designs), scores, done, time.perf_counter() - t0)
 
 
 def score_design(
-    store: ResultStore, design: ThumbDesign, object_names: Iterable[str], settings: SimSettings
+    store: ResultStore,
+    design: ThumbDesign,
+    object_names: Iterable[str],
+    settings: SimSettings,
+    gh_stride: int = 1,
 ) -> DesignScore:
-    """S_GAS of a design from the stored outcomes (all hypotheses must be present)."""
-    summary = store.summary(design_key(design), settings.key())
+    """S_GAS of a design from the stored outcomes (all its hypotheses must be present)."""
+    dkey, skey = design_key(design), settings.key()
+    summary = store.summary(dkey, skey) if gh_stride == 1 else {}
     scores: dict[str, ObjectScore] = {}
     types: dict[str, str] = {}
     for name in object_names:
-        n, n_fc, n_c = summary.get(object_key(name), (0, 0, 0))
-        n_gh = len(cached_hypotheses(name))
+        if gh_stride == 1:
+            n, n_fc, n_c = summary.get(object_key(name), (0, 0, 0))
+            n_gh = len(cached_hypotheses(name))
+        else:
+            ids = cached_hypotheses(name).ids[::gh_stride]
+            got = store.get_many(dkey, object_key(name), skey, ids)
+            n, n_gh = len(got), len(ids)
+            n_fc = sum(o.is_fc for o in got.values())
+            n_c = sum(o.is_correct for o in got.values())
         assert n == n_gh, f"{name}: {n} of {n_gh} outcomes stored"
         scores[name] = ObjectScore(n_gh, n_fc, n_c)
         types[name] = load_object(name).spec.grasp_type

@@ -18,8 +18,6 @@ import viser  # noqa: E402
 
 from app.design import CMC_RANGE_DEG, MCP_RANGE_DEG  # noqa: E402
 from app.design_map import interpolate_map  # noqa: E402
-from app.settings import SimSettings  # noqa: E402
-from app.store import ResultStore  # noqa: E402
 from app.explorer.map_data import (  # noqa: E402
     TOTAL,
     MapPoint,
@@ -27,8 +25,10 @@ from app.explorer.map_data import (  # noqa: E402
     metric_choices,
     metric_value,
 )
+from app.settings import SimSettings  # noqa: E402
+from app.store import ResultStore  # noqa: E402
 
-PICK_NONE = "(pick a computed design)"
+PICK_NONE: str = "(pick a computed design)"
 
 
 def render_map(
@@ -75,6 +75,7 @@ def render_map(
 
 def table_markdown(points: Sequence[MapPoint]) -> str:
     """Computed designs: CMC, MCP, PP, CG, total."""
+
     def f(x: float | None) -> str:
         return "–" if x is None or math.isnan(x) else f"{x:.1f}"
 
@@ -109,7 +110,8 @@ class MapPanel:
         self.metric = gui.add_dropdown("Map of", options=metric_choices(self.objects),
                                        initial_value=TOTAL)  # fmt: skip
         self.image = gui.add_image(np.full((62, 56, 3), 255, np.uint8), format="png")
-        self.pick = gui.add_dropdown("Go to design", options=(PICK_NONE,),
+        pick_opts: tuple[str, ...] = (PICK_NONE,)
+        self.pick = gui.add_dropdown("Go to design", options=pick_opts,
                                      initial_value=PICK_NONE)  # fmt: skip
         self.refresh_btn = gui.add_button("Reload from store", icon=viser.Icon.REFRESH)
         self.table = gui.add_markdown("")
@@ -154,7 +156,10 @@ class MapPanel:
             if reload:
                 self.points = complete_designs(self.store, self.objects, self.settings)
                 self.table.content = table_markdown(self.points)
-                opts = (PICK_NONE, *(f"CMC {p.cmc_deg:g}°, MCP {p.mcp_deg:g}°" for p in self.points))
+                opts = (
+                    PICK_NONE,
+                    *(f"CMC {p.cmc_deg:g}°, MCP {p.mcp_deg:g}°" for p in self.points),
+                )
                 if tuple(self.pick.options) != opts:
                     self.pick.options = opts
             self.image.image = render_map(self.points, self.metric.value, self.current)

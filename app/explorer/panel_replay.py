@@ -9,21 +9,24 @@ import numpy as np
 import viser
 
 from app.closing_settings import CLOSING_MODES
+from app.explorer.scene_object import CONTACT_COLORS
 from app.hypotheses import Hypotheses
 from app.store import GraspOutcome
-from app.explorer.scene_object import CONTACT_COLORS
 
-ALL = "all"
+ALL: str = "all"
 OUTCOME_FILTERS = (ALL, "FC", "correct", "FC not correct", "failed (not FC)")
 
-LEGEND_MD = "  \n".join(
-    f"<span style='color:rgb{CONTACT_COLORS[k]}'>&#9679;</span> {text}"
-    for k, text in (
-        ("palmar", "palmar contact on a finger"),
-        ("non_palmar", "non-palmar contact on a finger"),
-        ("palm", "contact on the palm"),
+LEGEND_MD = (
+    "  \n".join(
+        f"<span style='color:rgb{CONTACT_COLORS[k]}'>&#9679;</span> {text}"
+        for k, text in (
+            ("palmar", "palmar contact on a finger"),
+            ("non_palmar", "non-palmar contact on a finger"),
+            ("palm", "contact on the palm"),
+        )
     )
-) + "  \n<span style='color:rgb(200,30,160)'>&#9679;</span> P and hand vector n"
+    + "  \n<span style='color:rgb(200,30,160)'>&#9679;</span> P and hand vector n"
+)
 
 
 def outcome_passes(o: GraspOutcome | None, kind: str) -> bool:
@@ -63,13 +66,15 @@ class ReplayPanel:
         on_select: Callable[[int], None],
         on_play: Callable[[], None],
         on_mode: Callable[[str], None],
+        load_outcomes: Callable[[], Mapping[str, GraspOutcome]],
     ) -> None:
         self._on_select = on_select
         self._muted = False
         self.indices: np.ndarray = np.zeros(0, dtype=int)
-        self.standoff = gui.add_dropdown("Standoff", options=(ALL,), initial_value=ALL)
-        self.roll = gui.add_dropdown("Roll", options=(ALL,), initial_value=ALL)
-        self.ray = gui.add_dropdown("Ray", options=(ALL,), initial_value=ALL)
+        only_all: tuple[str, ...] = (ALL,)
+        self.standoff = gui.add_dropdown("Standoff", options=only_all, initial_value=ALL)
+        self.roll = gui.add_dropdown("Roll", options=only_all, initial_value=ALL)
+        self.ray = gui.add_dropdown("Ray", options=only_all, initial_value=ALL)
         self.outcome = gui.add_dropdown(
             "Outcome", options=OUTCOME_FILTERS, initial_value=ALL,
             hint="Filter by the stored outcome of this design (computed by the S_GAS worker).",
@@ -90,7 +95,9 @@ class ReplayPanel:
         self.play.on_click(lambda _: on_play())
         self.mode.on_update(lambda _: on_mode(self.mode.value))
         self._hyps: Hypotheses | None = None
+        self._load_outcomes = load_outcomes
         self._outcomes: Mapping[str, GraspOutcome] = {}
+        self._known: set[str] = set()
 
     def set_hypotheses(self, hyps: Hypotheses) -> None:
         """New object: rebuild the filter choices."""
@@ -107,11 +114,14 @@ class ReplayPanel:
         finally:
             self._muted = False
 
-    def set_outcomes(self, outcomes: Mapping[str, GraspOutcome]) -> None:
-        """Stored outcomes of the current design (for the outcome filter)."""
-        self._outcomes = outcomes
+    def set_known(self, ids: set[str]) -> None:
+        """Ids of the GHs with a stored outcome for the current design (the outcome filter
+        loads their outcomes only while it is in use)."""
+        self._known = ids
         if self.outcome.value != ALL:
             self._filter_changed()
+        else:
+            self._update_count()
 
     def filtered(self) -> np.ndarray:
         """Indices of the hypotheses passing every filter."""
@@ -127,6 +137,8 @@ class ReplayPanel:
             keep &= h.ray_index == int(self.ray.value)
         if self.outcome.value != ALL:
             kind = self.outcome.value
+            if set(self._outcomes) != self._known:
+                self._outcomes = self._load_outcomes()
             keep &= np.array([outcome_passes(self._outcomes.get(i), kind) for i in h.ids])
         return np.flatnonzero(keep)
 
@@ -172,7 +184,7 @@ class ReplayPanel:
             return
         i = self.current()
         assert i is not None
-        known = sum(1 for g in h.ids if g in self._outcomes)
+        known = len(self._known)
         self.count.content = (
             f"GH {int(self.gh.value) + 1} of {n} shown (of {len(h)}); index {i}  \n"
             f"stored outcomes for this design: {known}/{len(h)}"

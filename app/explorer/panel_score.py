@@ -82,7 +82,9 @@ def snapshot_markdown(s: ScoreSnapshot) -> str:
         gt = load_object(k).spec.grasp_type
         if k in score.objects:
             o = score.objects[k]
-            rows.append(f"| {k} | {gt} | {_pct(o.fc_pct)} | {_pct(o.c_pct)} | **{_pct(o.sgas_pct)}** |")
+            rows.append(
+                f"| {k} | {gt} | {_pct(o.fc_pct)} | {_pct(o.c_pct)} | **{_pct(o.sgas_pct)}** |"
+            )
         else:
             n = s.counts.get(k, (0, 0, 0))[0]
             mark = "computing" if s.running == k else "pending"
@@ -154,7 +156,9 @@ class ScoreWorker:
         self.on_snapshot(snap)
         with self._lock:
             self._cancel.set()  # a stale computation stops at its next task
-            self._pending = (design, settings, time.monotonic() + self.debounce_s) if missing else None
+            self._pending = (
+                (design, settings, time.monotonic() + self.debounce_s) if missing else None
+            )
             if missing:
                 self.idle.clear()
             self._wake.set()
@@ -204,7 +208,13 @@ class ScoreWorker:
                 snap.done, snap.total = 0, snap.n_gh[key] - have
                 self.on_snapshot(snap)
 
-                def progress(done: int, total: int, snap: ScoreSnapshot = snap) -> None:
+                def progress(
+                    done: int,
+                    total: int,
+                    snap: ScoreSnapshot = snap,
+                    key: str = key,
+                    have: int = have,
+                ) -> None:
                     snap.done, snap.total = done, total
                     if not cancel.is_set():
                         counts = snap.counts[key]

@@ -89,7 +89,8 @@ class SharePanel:
             return
         data = png_bytes(img)
         d = s.design
-        name = f"handbench_c{d.cmc_deg:g}_m{d.mcp_deg:g}_{s.object_key}_gh{s.gh}_{int(time.time())}.png"
+        stamp = time.strftime("%Y%m%d-%H%M%S")
+        name = f"handbench_c{d.cmc_deg:g}_m{d.mcp_deg:g}_{s.object_key}_gh{s.gh}_{stamp}.png"
         s.ctx.shots_dir.mkdir(parents=True, exist_ok=True)
         path = s.ctx.shots_dir / name
         path.write_bytes(data)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import viser
 
-from app.hand.model import Hand
 from app.explorer.units import MM, pose_to_scene, to_scene
+from app.hand.model import Hand
 
 HAND_COLOR = (214, 186, 160)
 THUMB_COLOR = (196, 160, 130)

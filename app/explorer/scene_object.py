@@ -6,8 +6,8 @@ import numpy as np
 import viser
 
 from app.contact_set import ContactSet
-from app.hypotheses import Hypotheses
 from app.explorer.units import to_scene
+from app.hypotheses import Hypotheses
 
 OBJECT_COLOR = (150, 170, 190)
 RAY_COLOR = (150, 150, 150)
@@ -21,7 +21,7 @@ CONTACT_COLORS = {
     "palm": (40, 100, 230),
 }
 RAY_LENGTH_MM = 120.0
-NORMAL_LENGTH_MM = 12.0
+NORMAL_LENGTH_MM = 20.0
 N_LENGTH_MM = 60.0
 
 
@@ -106,7 +106,7 @@ class ObjectView:
             f"{self.root}/contacts",
             points=to_scene(contacts.p_object),
             colors=colors,
-            point_size=0.004,
+            point_size=0.006,
             point_shape="circle",
             precision="float32",
         )

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from app.errors import HandbenchError, SettingsError
 from app.explorer.browser import browser_context, hide_toasts, wait_drawn
-from app.explorer.server import ExplorerServer
+from app.explorer.server import ExplorerServer, workers_from_env
 from app.explorer.url_state import UrlState
 
 
@@ -36,7 +36,11 @@ def take_screenshot(
 ) -> Path:
     """Serve (unless ``server`` is given), open ``state`` in chromium, save a PNG of the page."""
     own = server is None
-    srv = server or ExplorerServer("127.0.0.1", 0, store_path)
+    # the S_GAS panel computes in a thread here (no process pool for one picture)
+    workers = workers_from_env()
+    srv = server or ExplorerServer(
+        "127.0.0.1", 0, store_path, workers=0 if workers is None else workers
+    )
     tab = "map" if view == "map" else ("grasp" if state.gh is not None else None)
     url = srv.url + "/" + UrlState(state.cmc_deg, state.mcp_deg, state.object_key,
                                    state.gh, tab).query()  # fmt: skip

@@ -14,10 +14,10 @@ from pathlib import Path
 
 import viser
 
+from app.explorer.session import ExplorerContext, Session
 from app.objects import OBJECT_KEYS, load_object
 from app.store import ResultStore, default_store_path
 from app.sweep import Executor, InlineExecutor, LocalExecutor
-from app.explorer.session import ExplorerContext, Session
 
 OBJECTS_ENV = "HANDBENCH_EXPLORER_OBJECTS"
 """Comma list of object keys for the S_GAS panel and the map (default: all six)."""
@@ -42,7 +42,7 @@ def _objects_from_env() -> tuple[str, ...]:
     return tuple(k.strip() for k in env.split(",") if k.strip()) if env else OBJECT_KEYS
 
 
-def _workers_from_env() -> int | None:
+def workers_from_env() -> int | None:
     env = os.environ.get(WORKERS_ENV, "").strip()
     return int(env) if env else None
 
@@ -64,8 +64,10 @@ class ExplorerServer:
         objs = tuple(objects) if objects else _objects_from_env()
         for k in objs:
             load_object(k)  # UnknownObjectError lists the valid keys
-        workers = _workers_from_env() if workers is None else workers
-        self.executor: Executor = InlineExecutor() if workers == 0 else _SharedLocalExecutor(workers)
+        workers = workers_from_env() if workers is None else workers
+        self.executor: Executor = (
+            InlineExecutor() if workers == 0 else _SharedLocalExecutor(workers)
+        )
         self.store = ResultStore(Path(store_path) if store_path else default_store_path())
         self.viser = viser.ViserServer(host=host, port=port, label="handbench", verbose=False)
         shown_host = "127.0.0.1" if host in ("0.0.0.0", "::") else host

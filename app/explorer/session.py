@@ -18,6 +18,16 @@ import viser
 from app.closing_settings import ClosingSettings
 from app.design import BASELINE, ThumbDesign
 from app.errors import HandbenchError
+from app.explorer import url_state
+from app.explorer.panel_design import DesignPanel
+from app.explorer.panel_import import ImportPanel
+from app.explorer.panel_map import MapPanel
+from app.explorer.panel_replay import ReplayPanel, outcome_markdown
+from app.explorer.panel_score import ScorePanel, ScoreWorker
+from app.explorer.panel_share import SharePanel
+from app.explorer.scene_hand import HandView
+from app.explorer.scene_object import ObjectView
+from app.explorer.units import MM
 from app.hand.model import Hand, build_hand
 from app.hypotheses import Hypotheses
 from app.judge import judge
@@ -27,15 +37,6 @@ from app.settings import SimSettings
 from app.simulate import HandKit
 from app.store import GraspOutcome, ResultStore
 from app.sweep import Executor, cached_hypotheses, design_key, object_key
-from app.explorer import url_state
-from app.explorer.panel_design import DesignPanel
-from app.explorer.panel_map import MapPanel
-from app.explorer.panel_replay import ReplayPanel, outcome_markdown
-from app.explorer.panel_score import ScorePanel, ScoreWorker
-from app.explorer.panel_share import SharePanel
-from app.explorer.scene_hand import HandView
-from app.explorer.scene_object import ObjectView
-from app.explorer.units import MM
 
 REPLAY_HZ = 30.0
 
@@ -120,7 +121,7 @@ class Session:
         scene.add_light_ambient("/lights/ambient", intensity=0.9)
         scene.add_light_directional("/lights/key", intensity=2.2, wxyz=(0.88, 0.28, 0.36, 0.0))
         scene.add_light_directional("/lights/fill", intensity=0.8, wxyz=(0.5, -0.5, 0.5, 0.5))
-        scene.add_grid("/floor", width=0.6, height=0.6, cell_size=0.05, section_size=0.1)
+        scene.add_grid("/floor", width=0.5, height=0.5, cell_size=0.02, section_size=0.1)
         self.hand_view = HandView(scene, self.hand)
         self.object_view = ObjectView(scene)
 
@@ -136,8 +137,12 @@ class Session:
             self.object_dd.on_update(lambda _: self.on_object(self.object_dd.value))
             with gui.add_folder("Live S_GAS"):
                 self.score_panel = ScorePanel(gui)
+            with gui.add_folder("Import a mesh", expand_by_default=False):
+                self.import_panel = ImportPanel(gui, self._imported)
         with tabs.add_tab("Grasp", viser.Icon.PLAYER_PLAY):
-            self.replay_panel = ReplayPanel(gui, self.on_gh, self.on_play, self.on_mode)
+            self.replay_panel = ReplayPanel(
+                gui, self.on_gh, self.on_play, self.on_mode, self._load_outcomes
+            )
         with tabs.add_tab("Map", viser.Icon.MAP):
             self.map_panel = MapPanel(gui, self.ctx.store, self.ctx.objects, self._map_select)
         with tabs.add_tab("Share", viser.Icon.SHARE):
@@ -276,6 +281,10 @@ class Session:
             self._refresh_outcomes()
             self.map_panel.set_settings(self.settings)
 
+    def _imported(self, key: str) -> None:
+        self.object_dd.options = available_keys()
+        self.on_object(key)
+
     def _map_select(self, cmc_deg: float, mcp_deg: float) -> None:
         self.design_panel.set_design(cmc_deg, mcp_deg)
 
@@ -348,30 +357,38 @@ class Session:
             self._refresh_outcomes()
         self.map_panel.refresh()
 
+    def _keys(self) -> tuple[str, str, str]:
+        return design_key(self.design), object_key(self.object_key), self.settings.key()
+
     def _refresh_outcomes(self) -> None:
-        """Stored per-GH outcomes of this design and object (for the outcome filter)."""
-        outs = self.ctx.store.get_many(
-            design_key(self.design), object_key(self.object_key), self.settings.key(),
-            list(self.hyps.ids),
-        )  # fmt: skip
-        self.replay_panel.set_outcomes(outs)
+        """Which GHs of this design and object have stored outcomes (for the filter)."""
+        self.replay_panel.set_known(self.ctx.store.present_ids(*self._keys()))
+
+    def _load_outcomes(self) -> dict[str, GraspOutcome]:
+        return self.ctx.store.get_many(*self._keys(), list(self.hyps.ids))
 
     # ------------------------------------------------------------------ view
     def frame_camera(self) -> None:
-        """Point the camera at the object and the hand from the radial-palmar side."""
-        pts = [self.obj.mesh.bounds]
+        """Frame the object and the hand, seen from the hand's radial (thumb) side, a little
+        from above and from the back of the hand, so the thumb and the grasp are visible."""
         T = self.hand_view.T_object_palm
-        pts.append((T[:3, :3] @ self.hand.approach_point_palm + T[:3, 3])[None])
-        allp = np.vstack(pts)
+        T_links = T[None] @ self.hand.link_poses(self.hand_view.q)
+        allp = np.vstack([self.obj.mesh.bounds, T_links[:, :3, 3]])
         lo, hi = allp.min(axis=0), allp.max(axis=0)
         centre = (lo + hi) / 2
-        radius = float(np.linalg.norm(hi - lo)) / 2 + 60.0
-        view = np.array([0.9, -1.3, 0.7])
+        radius = float(np.linalg.norm(hi - lo)) / 2 + 30.0
+        R = T[:3, :3]
+        view = R @ np.array([1.0, -0.25, -0.15]) + np.array([0.0, 0.0, 0.35])
         view /= np.linalg.norm(view)
+        up = np.array([0.0, 0.0, 1.0])
+        right = np.cross(-view, up)
+        right /= max(float(np.linalg.norm(right)), 1e-9)
+        # the panel covers the right of the page: aim a little right so the grasp sits left
+        target = centre + right * 0.35 * radius
         cam = self.client.camera
-        cam.up_direction = (0.0, 0.0, 1.0)
-        cam.position = tuple((centre + view * radius * 2.4) * MM)
-        cam.look_at = tuple(centre * MM)  # after position: position moves look_at along
+        cam.up_direction = tuple(up)
+        cam.position = tuple((target + view * radius * 2.0) * MM)
+        cam.look_at = tuple(target * MM)  # after position: position moves look_at along
 
     def state_query(self) -> str:
         """The link query of the current state."""

@@ -54,11 +54,14 @@ class FingerChain:
 
     def link_poses(self, q_finger: np.ndarray) -> np.ndarray:
         """(3, 4, 4) T_palm_link of the three links at the finger's joint angles (3,)."""
-        out = np.empty((3, 4, 4))
-        T = np.eye(4)
-        for k in range(3):
-            T = T @ self.placements[k] @ _rx(float(q_finger[k]))
-            out[k] = T
+        out = self.placements.copy()
+        c, s = np.cos(q_finger), np.sin(q_finger)
+        # right-multiplying by Rx(q) mixes columns 1 and 2 of each placement
+        y, z = out[:, :3, 1].copy(), out[:, :3, 2].copy()
+        out[:, :3, 1] = y * c[:, None] + z * s[:, None]
+        out[:, :3, 2] = z * c[:, None] - y * s[:, None]
+        out[1] = out[0] @ out[1]
+        out[2] = out[1] @ out[2]
         return out
 
 

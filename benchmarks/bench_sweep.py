@@ -1,0 +1,101 @@
+"""Engine figures (issue 3 item 6, issue 6 item 1). Prints figures; asserts nothing.
+
+- GH closings per second per core and FCL queries per closing (base stage and thumb stage)
+- seconds for one design over all six objects (4,260 GHs), cold store, local process pool
+- the same on a warm store (everything cached)
+- with --full: seconds for the 28-design sweep, cold store
+- peak RSS of this process and its workers
+
+Usage: .venv/bin/python benchmarks/bench_sweep.py [--workers N] [--full] [--sample K]
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+from app.closing import ClosingStats
+from app.design import ThumbDesign, published_designs
+from app.objects import OBJECT_KEYS, load_object
+from app.settings import SimSettings
+from app.simulate import simulate_base, simulate_thumb
+from app.store import ResultStore
+from app.sweep import LocalExecutor, _kit, cached_hypotheses, run_sweep
+
+
+def per_core_rates(sample: int) -> None:
+    """Single-process timing of the two stages on every ``sample``-th GH of each object."""
+    s = SimSettings()
+    kit = _kit(0.0, 45.0, "ulnar")
+    tb = tt = 0.0
+    nb = nq_b = nq_t = 0
+    for key in OBJECT_KEYS:
+        obj, hy = load_object(key), cached_hypotheses(key)
+        for i in range(0, len(hy), sample):
+            sb = ClosingStats()
+            t0 = time.perf_counter()
+            base = simulate_base(kit, obj, hy, i, s, sb)
+            t1 = time.perf_counter()
+            g = simulate_thumb(kit, obj, base, s)
+            t2 = time.perf_counter()
+            tb += t1 - t0
+            tt += t2 - t1
+            nb += 1
+            nq_b += base.queries
+            nq_t += g.queries
+    print(f"sampled GHs                          : {nb} (every {sample}th of each object)")
+    print(f"base stage (approach + long fingers) : {nb / tb:8.1f} GH/s per core, "
+          f"{nq_b / nb:6.1f} FCL queries per GH")
+    print(f"thumb stage (per design)             : {nb / tt:8.1f} GH/s per core, "
+          f"{nq_t / nb:6.1f} FCL queries per GH")
+    print(f"full closing (base + thumb)          : {nb / (tb + tt):8.1f} GH/s per core")
+
+
+def timed_sweep(designs: list[ThumbDesign], workers: int, store_path: Path) -> float:
+    with ResultStore(store_path) as store:
+        ex = LocalExecutor(workers)
+        try:
+            t0 = time.perf_counter()
+            res = run_sweep(designs, OBJECT_KEYS, store=store, executor=ex, progress=False)
+            dt = time.perf_counter() - t0
+        finally:
+            ex.close()
+    assert res is not None
+    return dt
+
+
+def peak_rss_mib() -> tuple[float, float]:
+    me = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    return me, kids
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--full", action="store_true", help="also time the 28-design sweep")
+    ap.add_argument("--sample", type=int, default=20, help="GH stride for per-core rates")
+    args = ap.parse_args()
+    per_core_rates(args.sample)
+    tmp = Path(tempfile.mkdtemp(prefix="handbench-bench-"))
+    try:
+        n = sum(len(cached_hypotheses(k)) for k in OBJECT_KEYS)
+        dt = timed_sweep([ThumbDesign(0, 45)], args.workers, tmp / "one.sqlite")
+        print(f"one design, six objects ({n} GHs), cold : {dt:8.1f} s  ({args.workers} workers)")
+        dt = timed_sweep([ThumbDesign(0, 45)], args.workers, tmp / "one.sqlite")
+        print(f"the same, warm store                    : {dt:8.2f} s")
+        if args.full:
+            dt = timed_sweep(published_designs(), args.workers, tmp / "all.sqlite")
+            print(f"28-design sweep, cold                   : {dt:8.1f} s  ({args.workers} workers)")
+        me, kids = peak_rss_mib()
+        print(f"peak RSS: driver {me:.0f} MiB, largest worker {kids:.0f} MiB")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()

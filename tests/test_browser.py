@@ -1,0 +1,203 @@
+"""The explorer in a real browser: Debian's chromium, headless, WebGL in software.
+
+Ready sequence of /work/shared/notes/browser-testing.md: the client connected, a known GUI
+element visible, a WebGL frame rendered (``client.get_render``), two animation frames.
+Checks are made server-side (the tab's session state and its scene-node poses) and on
+pictures (not blank, right size).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.browser
+
+if not Path("/usr/bin/chromium").exists():
+    pytest.skip(
+        "Debian's chromium is missing at /usr/bin/chromium: `sudo apt-get install chromium`",
+        allow_module_level=True,
+    )
+pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
+
+from app.explorer.browser import browser_context, hide_toasts, wait_drawn  # noqa: E402
+from app.explorer.server import ExplorerServer  # noqa: E402
+from app.explorer.session import Session  # noqa: E402
+
+BUILD = Path(__file__).resolve().parents[1] / "build" / "test_browser"
+OBJECTS = ["chips_can"]  # one object keeps the live S_GAS work small
+
+
+def wait_until(cond: Callable[[], Any], timeout: float = 30.0, what: str = "condition") -> Any:
+    t_end = time.monotonic() + timeout
+    while time.monotonic() < t_end:
+        v = cond()
+        if v:
+            return v
+        time.sleep(0.05)
+    raise AssertionError(f"timed out after {timeout:g} s waiting for {what}")
+
+
+def not_blank(img: np.ndarray) -> bool:
+    """More than a flat colour: some pixels differ clearly from the background."""
+    rgb = img[..., :3].astype(float)
+    return float(rgb.std()) > 5.0 and len(np.unique(rgb.reshape(-1, 3), axis=0)) > 50
+
+
+@pytest.fixture(scope="module")
+def server() -> Iterator[ExplorerServer]:
+    shutil.rmtree(BUILD, ignore_errors=True)
+    BUILD.mkdir(parents=True)
+    srv = ExplorerServer(
+        "127.0.0.1", 0, BUILD / "store.sqlite", objects=OBJECTS, workers=0,
+        shots_dir=BUILD / "shots", debounce_s=0.2,
+    )  # fmt: skip
+    yield srv
+    srv.stop()
+
+
+@pytest.fixture()
+def browser() -> Iterator[Any]:
+    """A fresh chromium per test (playwright's sync API cannot nest, and the screenshot
+    command starts its own)."""
+    with browser_context(1280, 800, BUILD / "profiles") as ctx:
+        yield ctx
+
+
+def open_tab(server: ExplorerServer, browser: Any, query: str = "") -> tuple[Any, Session]:
+    """Open a tab and return it with its session once the ready sequence completed."""
+    before = set(server.sessions)
+    page = browser.new_page()
+    page.goto(server.url + "/" + query)
+    page.get_by_text("CMC (°)", exact=True).wait_for(timeout=30_000)
+    new = wait_until(lambda: set(server.sessions) - before, 30, "the tab's session")
+    session = server.sessions[new.pop()]
+    wait_until(session.ready.is_set, 30, "the link state to be applied")
+    wait_drawn(page, session.client, 30)
+    return page, session
+
+
+def slider(page: Any, label: str) -> Any:
+    """The role=slider of the row labelled ``label``."""
+    row = page.locator("div").filter(has=page.get_by_text(label, exact=True))
+    return row.filter(has=page.get_by_role("slider")).last.get_by_role("slider")
+
+
+def test_page_draws_hand(server: ExplorerServer, browser: Any) -> None:
+    page, s = open_tab(server, browser)
+    try:
+        assert set(s.hand_view.nodes) >= {"palm", "thumb_distal", "index_distal"}
+        img = s.client.get_render(300, 400, transport_format="png", timeout=30)
+        assert img.shape[:2] == (300, 400) and not_blank(img)
+        hide_toasts(page)
+        shot = BUILD / "page.png"
+        page.screenshot(path=str(shot))
+        import matplotlib.pyplot as plt
+
+        assert not_blank((plt.imread(shot) * 255).astype(np.uint8))
+    finally:
+        page.close()
+
+
+def test_cmc_slider_moves_thumb_and_starts_sgas(server: ExplorerServer, browser: Any) -> None:
+    page, s = open_tab(server, browser)
+    try:
+        cmc0 = s.design.cmc_deg
+        thumb0 = s.hand_view.link_position_mm("thumb_distal")
+        wxyz0 = np.asarray(s.hand_view.nodes["thumb_metacarpal"].wxyz).copy()
+        table0 = s.score_panel.table.content
+        knob = slider(page, "CMC (°)")
+        knob.focus()
+        for _ in range(20):  # step 0.5° -> +10°
+            knob.press("ArrowRight")
+        wait_until(lambda: s.design.cmc_deg == cmc0 + 10.0, 15, "the design to follow the slider")
+        assert s.design_panel.cmc.value == pytest.approx(cmc0 + 10.0)
+        thumb1 = s.hand_view.link_position_mm("thumb_distal")
+        wxyz1 = np.asarray(s.hand_view.nodes["thumb_metacarpal"].wxyz)
+        assert np.linalg.norm(thumb1 - thumb0) > 1.0 or not np.allclose(wxyz0, wxyz1)
+        want = f"CMC {cmc0 + 10:g}°"
+        wait_until(lambda: want in s.score_panel.table.content, 10, "the S_GAS panel")
+        text = s.score_panel.table.content
+        assert text != table0
+        assert any(w in text for w in ("waiting", "computing", "complete"))
+        started = ("computing", "complete")
+        wait_until(
+            lambda: any(w in s.score_panel.table.content for w in started), 10, "the S_GAS worker"
+        )
+        assert s.timings.hand_redraw and max(s.timings.hand_redraw) < 0.5
+    finally:
+        page.close()
+
+
+def test_replay_shows_contacts(server: ExplorerServer, browser: Any) -> None:
+    page, s = open_tab(server, browser, "?cmc=15&mcp=60&object=chips_can&gh=17")
+    try:
+        assert (s.design.cmc_deg, s.design.mcp_deg, s.gh) == (15.0, 60.0, 17)
+        page.get_by_role("tab", name="Grasp").click()
+        page.get_by_role("button", name="Play replay").click()
+        wait_until(lambda: "replay:" in s.replay_panel.stage.content, 10, "the replay to start")
+        assert s.object_view.n_contacts == 0  # hidden while the hand moves
+        wait_until(lambda: s.replay_panel.stage.content == "final grasp", 30, "the replay end")
+        node = s.object_view.contacts_node
+        assert node is not None and s.object_view.n_contacts > 0
+        assert np.asarray(node.points).shape == (s.object_view.n_contacts, 3)
+        assert "FC:" in s.replay_panel.result.content
+        assert "correct:" in s.replay_panel.result.content
+    finally:
+        page.close()
+
+
+def test_two_tabs_keep_separate_states(server: ExplorerServer, browser: Any) -> None:
+    pa, a = open_tab(server, browser, "?cmc=0&mcp=30")
+    pb, b = open_tab(server, browser, "?cmc=45&mcp=90&object=chips_can&gh=5")
+    try:
+        assert (a.design.cmc_deg, a.design.mcp_deg) == (0.0, 30.0)
+        assert (b.design.cmc_deg, b.design.mcp_deg, b.gh) == (45.0, 90.0, 5)
+        ka, kb = slider(pa, "MCP (°)"), slider(pb, "MCP (°)")
+        ka.focus()
+        kb.focus()
+        for _ in range(10):  # both tabs dragging at once
+            ka.press("ArrowRight")
+            kb.press("ArrowLeft")
+        wait_until(lambda: a.design.mcp_deg == 35.0 and b.design.mcp_deg == 85.0, 15, "both tabs")
+        assert a.design.cmc_deg == 0.0 and b.design.cmc_deg == 45.0
+        assert a.hand.design != b.hand.design
+        pa_thumb = a.hand_view.link_position_mm("thumb_distal")
+        pb_thumb = b.hand_view.link_position_mm("thumb_distal")
+        assert np.linalg.norm(pa_thumb - pb_thumb) > 1.0
+        worker = b.worker
+        pb.close()
+        wait_until(lambda: b.client.client_id not in server.sessions, 15, "the closed tab to go")
+        wait_until(lambda: not worker._thread.is_alive(), 10, "its worker to stop")  # noqa: SLF001
+        assert a.client.client_id in server.sessions
+    finally:
+        pa.close()
+        if not pb.is_closed():
+            pb.close()
+
+
+def test_screenshot_command(monkeypatch: pytest.MonkeyPatch) -> None:
+    from app.explorer.screenshot import screenshot_cli
+
+    monkeypatch.setenv("HANDBENCH_EXPLORER_OBJECTS", "small_marker")
+    monkeypatch.setenv("HANDBENCH_EXPLORER_WORKERS", "0")
+    out = BUILD / "cli.png"
+    args = argparse.Namespace(
+        cmc=30.0, mcp=75.0, cmc_tilt="ulnar", object="small_marker", gh="3", out=str(out),
+        size="900x600", view="scene", store=str(BUILD / "cli_store.sqlite"),
+    )  # fmt: skip
+    assert screenshot_cli(args) == 0
+    import matplotlib.pyplot as plt
+
+    img = plt.imread(out)
+    assert img.shape[:2] == (600, 900)
+    assert not_blank((img * 255).astype(np.uint8))
+    assert os.path.getsize(out) > 10_000
