@@ -109,9 +109,9 @@ class BoxRays:
     """Rays cast (hits and misses)."""
 
 
-def face_grid(lo: np.ndarray, hi: np.ndarray, face: int, spacing: float) -> tuple[
-    np.ndarray, np.ndarray
-]:
+def face_grid(
+    lo: np.ndarray, hi: np.ndarray, face: int, spacing: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Grid points of one face of the box [lo, hi] and their (i, j) indices.
 
     Returns:

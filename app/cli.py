@@ -27,14 +27,26 @@ def _add_dataclass_flags(parser: argparse.ArgumentParser, cls: type, group: str)
         default = f.default if f.default is not dataclasses.MISSING else None
         helptext = f"{docs.get(f.name, '')} (default: {default})"
         if get_origin(t) is tuple:
-            g.add_argument(flag, dest=f"{group}.{f.name}", type=float, nargs=len(get_args(t)),
-                           default=None, help=helptext)
+            g.add_argument(
+                flag,
+                dest=f"{group}.{f.name}",
+                type=float,
+                nargs=len(get_args(t)),
+                default=None,
+                help=helptext,
+            )
         elif get_args(t) and all(isinstance(a, str) for a in get_args(t)):  # Literal
-            g.add_argument(flag, dest=f"{group}.{f.name}", choices=get_args(t), default=None,
-                           help=helptext)
+            g.add_argument(
+                flag, dest=f"{group}.{f.name}", choices=get_args(t), default=None, help=helptext
+            )
         else:
-            g.add_argument(flag, dest=f"{group}.{f.name}", type=t if t in (int, float) else str,
-                           default=None, help=helptext)
+            g.add_argument(
+                flag,
+                dest=f"{group}.{f.name}",
+                type=t if t in (int, float) else str,
+                default=None,
+                help=helptext,
+            )
 
 
 def add_settings_flags(parser: argparse.ArgumentParser) -> None:
@@ -64,12 +76,15 @@ def settings_from_args(args: argparse.Namespace) -> Any:
 def add_design_flags(parser: argparse.ArgumentParser, required: bool = True) -> None:
     """--cmc, --mcp (degrees) and --cmc-tilt from ``ThumbDesign``."""
     docs = field_docs(ThumbDesign)
-    parser.add_argument("--cmc", type=float, required=required, metavar="DEG",
-                        help=docs["cmc_deg"] + " Range 0-45.")
-    parser.add_argument("--mcp", type=float, required=required, metavar="DEG",
-                        help=docs["mcp_deg"] + " Range 0-90.")
-    parser.add_argument("--cmc-tilt", choices=("ulnar", "radial"), default="ulnar",
-                        help=docs["cmc_tilt"])
+    parser.add_argument(
+        "--cmc", type=float, required=required, metavar="DEG", help=docs["cmc_deg"] + " Range 0-45."
+    )
+    parser.add_argument(
+        "--mcp", type=float, required=required, metavar="DEG", help=docs["mcp_deg"] + " Range 0-90."
+    )
+    parser.add_argument(
+        "--cmc-tilt", choices=("ulnar", "radial"), default="ulnar", help=docs["cmc_tilt"]
+    )
 
 
 def parse_angle_list(text: str, name: str) -> list[float]:
@@ -122,7 +137,21 @@ def cmd_render(args: argparse.Namespace) -> int:
     design = ThumbDesign(args.cmc, args.mcp, args.cmc_tilt)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    if args.object:
+    if args.gh is not None:
+        from app.grasp_view import PICKS, pick_hypothesis, render_grasp
+
+        if not args.object:
+            raise SettingsError("--gh needs --object")
+        _objects_arg([args.object])
+        settings = settings_from_args(args)
+        gh: str | int = args.gh
+        if args.gh in PICKS:
+            with _store(args) as store:
+                gh = pick_hypothesis(store, design, args.object, settings, args.gh)
+        elif args.gh.isdigit():
+            gh = int(args.gh)
+        print(render_grasp(out, design, args.object, gh, settings))
+    elif args.object:
         _objects_arg([args.object])
         render_object(out, args.object, cmc_deg=design.cmc_deg, mcp_deg=design.mcp_deg)
     else:
@@ -140,9 +169,15 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     with _store(args) as store:
         ex = make_executor(args.executor, args.workers, args.address)
         try:
-            res = run_sweep([design], names, settings=settings, store=store, executor=ex,
-                            progress=not args.json and sys.stderr.isatty(),
-                            gh_stride=args.gh_stride)
+            res = run_sweep(
+                [design],
+                names,
+                settings=settings,
+                store=store,
+                executor=ex,
+                progress=not args.json and sys.stderr.isatty(),
+                gh_stride=args.gh_stride,
+            )
         finally:
             ex.close()
     assert res is not None
@@ -151,8 +186,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(doc, indent=2))
         return 0
-    print(f"design CMC {design.cmc_deg:g}°, MCP {design.mcp_deg:g}°"
-          f"  ({res.computed} grasps simulated, {res.seconds:.1f} s)")
+    print(
+        f"design CMC {design.cmc_deg:g}°, MCP {design.mcp_deg:g}°"
+        f"  ({res.computed} grasps simulated, {res.seconds:.1f} s)"
+    )
     print(f"{'object':<14}{'N_GH':>6}{'FC %':>8}{'C %':>8}{'S_GAS %':>9}")
     for key, o in doc["objects"].items():
         print(f"{key:<14}{o['n_gh']:>6}{o['fc_pct']:>8.1f}{o['c_pct']:>8.1f}{o['sgas_pct']:>9.1f}")
@@ -180,8 +217,15 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     with _store(args) as store:
         ex = make_executor(args.executor, args.workers, args.address)
         try:
-            res = run_sweep(designs, names, settings=settings, store=store, executor=ex,
-                            chunk=args.chunk, gh_stride=args.gh_stride)
+            res = run_sweep(
+                designs,
+                names,
+                settings=settings,
+                store=store,
+                executor=ex,
+                chunk=args.chunk,
+                gh_stride=args.gh_stride,
+            )
         finally:
             ex.close()
     assert res is not None
@@ -195,12 +239,73 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     plot_contour(rows, out / "contour.png")
     plot_bars(rows, out / "bars.png", names_disp, n_gh)
     (out / "settings.json").write_text(json.dumps(settings.as_dict(), indent=2))
-    best = max(rows, key=lambda r: r["total_sgas_pct"])
-    print(f"{len(designs)} designs x {len(names)} objects: {res.computed} grasps simulated in "
-          f"{time.perf_counter() - t0:.1f} s")
-    print(f"best design: CMC {best['cmc_deg']:g}°, MCP {best['mcp_deg']:g}° "
-          f"(total S_GAS {best['total_sgas_pct']:.1f} %)")
+    best = max(rows, key=lambda r: -1.0 if r["total_sgas_pct"] is None else r["total_sgas_pct"])
+    print(
+        f"{len(designs)} designs x {len(names)} objects: {res.computed} grasps simulated in "
+        f"{time.perf_counter() - t0:.1f} s"
+    )
+    total = best["total_sgas_pct"]
+    print(
+        f"best design: CMC {best['cmc_deg']:g}°, MCP {best['mcp_deg']:g}° "
+        f"(total S_GAS {'-' if total is None else f'{total:.1f}'} %)"
+    )
     print(f"wrote {out}/table.csv, table.md, lines.png, contour.png, bars.png")
+    return 0
+
+
+def cmd_bruteforce(args: argparse.Namespace) -> int:
+    from app.design import ThumbDesign as D
+    from app.gqm import GQMSettings
+    from app.gqm.compare import run_comparison
+    from app.sweep import make_executor
+
+    cmcs = parse_angle_list(args.cmc, "cmc") if args.cmc else list(CMC_GRID_DEG)
+    mcps = parse_angle_list(args.mcp, "mcp") if args.mcp else list(MCP_GRID_DEG)
+    designs = [D(c, m) for c in cmcs for m in mcps]
+    names = _objects_arg(args.object)
+    settings = settings_from_args(args)
+    if args.max_grasps < 1:
+        raise SettingsError(f"--max-grasps must be >= 1, got {args.max_grasps}")
+    hset = "brute_force_nodup" if args.drop_duplicate_roll else "brute_force"
+    gqm = GQMSettings(
+        mu=settings.fc.mu, n_edges=settings.fc.n_edges, wrench_contacts=args.wrench_contacts
+    )
+    out = Path(args.out)
+    t0 = time.perf_counter()
+    with _store(args) as store:
+        ex = make_executor(args.executor, args.workers, args.address)
+        try:
+            res = run_comparison(
+                designs,
+                names,
+                store,
+                out,
+                sim=settings,
+                gqm=gqm,
+                executor=ex,
+                max_grasps=args.max_grasps,
+                seed=args.seed,
+                workers=args.workers or 1,
+                hypothesis_set=hset,
+                progress=sys.stderr.isatty(),
+                picture=not args.no_picture,
+            )
+        finally:
+            ex.close()
+    print(
+        f"{len(designs)} designs x {len(names)} objects, brute-force GHs per object: "
+        + ", ".join(f"{k} {v}" for k, v in res.n_gh.items())
+    )
+    sec = res.seconds
+    print(
+        f"{res.simulated} grasps simulated ({sec['simulate']:.1f} s), {len(res.scored)} FC "
+        f"grasps scored ({sec['gqm']:.1f} s), tables ({sec['write']:.1f} s); "
+        f"total {time.perf_counter() - t0:.1f} s"
+    )
+    md = next((q for q in res.paths if q.suffix == ".md"), None)
+    if md is not None:
+        print(md.read_text())
+    print("wrote " + ", ".join(str(q) for q in res.paths))
     return 0
 
 
@@ -208,17 +313,22 @@ def cmd_objects(args: argparse.Namespace) -> int:
     from app.objects import OBJECT_KEYS, import_object, load_object
 
     if args.objects_cmd == "import":
-        obj = import_object(args.path, like=args.like, units=args.units, key=args.key,
-                            save_to=args.save_to)
+        obj = import_object(
+            args.path, like=args.like, units=args.units, key=args.key, save_to=args.save_to
+        )
         b = obj.mesh.bounds
-        print(f"imported {obj.spec.key} ({args.path}) like {args.like}: "
-              f"{len(obj.mesh.faces)} faces, size {(b[1] - b[0]).round(1).tolist()} mm")
+        print(
+            f"imported {obj.spec.key} ({args.path}) like {args.like}: "
+            f"{len(obj.mesh.faces)} faces, size {(b[1] - b[0]).round(1).tolist()} mm"
+        )
         return 0
     for k in OBJECT_KEYS:
         o = load_object(k)
         b = o.mesh.bounds
-        print(f"{k:<14} {o.spec.grasp_type}  N_GH {o.spec.setup.n_gh:>5}  "
-              f"size {(b[1] - b[0]).round(1).tolist()} mm  {o.spec.name}")
+        print(
+            f"{k:<14} {o.spec.grasp_type}  N_GH {o.spec.setup.n_gh:>5}  "
+            f"size {(b[1] - b[0]).round(1).tolist()} mm  {o.spec.name}"
+        )
     return 0
 
 
@@ -245,7 +355,14 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("render", help="off-screen picture of the hand (and an object)")
     add_design_flags(s)
     s.add_argument("--object", help="object key: show it with the hand at roll 0")
+    s.add_argument(
+        "--gh",
+        help="simulate this hypothesis (id, index, or first-correct / "
+        "first-fc / first-failed from the store) and draw the final grasp",
+    )
+    s.add_argument("--store", help="results database for --gh first-correct etc.")
     s.add_argument("--out", required=True, help="PNG file to write")
+    add_settings_flags(s)
     s.set_defaults(func=cmd_render)
 
     for name, helptext, func in (
@@ -262,16 +379,64 @@ def build_parser() -> argparse.ArgumentParser:
             s.add_argument("--out", default="out/sweep", help="output folder")
             s.add_argument("--chunk", type=int, default=60, help="hypotheses per task")
         s.add_argument("--object", nargs="+", help="object keys (default: all six)")
-        s.add_argument("--gh-stride", type=int, default=1, metavar="K",
-                       help="preview: only every K-th hypothesis of each object (default 1: "
-                       "all, as published)")
+        s.add_argument(
+            "--gh-stride",
+            type=int,
+            default=1,
+            metavar="K",
+            help="preview: only every K-th hypothesis of each object (default 1: "
+            "all, as published)",
+        )
         s.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
-        s.add_argument("--executor", choices=("local", "inline", "ray"), default="local",
-                       help="local process pool (default), inline, or a Ray cluster")
+        s.add_argument(
+            "--executor",
+            choices=("local", "inline", "ray"),
+            default="local",
+            help="local process pool (default), inline, or a Ray cluster",
+        )
         s.add_argument("--address", help="Ray cluster address (with --executor ray)")
-        s.add_argument("--store", help="results database (default ~/.cache/handbench/results.sqlite)")
+        s.add_argument(
+            "--store", help="results database (default ~/.cache/handbench/results.sqlite)"
+        )
         add_settings_flags(s)
         s.set_defaults(func=func)
+
+    s = sub.add_parser("bruteforce", help="brute-force grasps: the ten GQMs, best design per GQM")
+    s.add_argument("--cmc", help="CMC angles: '0,15,30,45' or '0:45:5' (default grid)")
+    s.add_argument("--mcp", help="MCP angles: '0,15,...,90' or '0:90:5' (default grid)")
+    s.add_argument("--out", default="out/bruteforce", help="output folder")
+    s.add_argument("--object", nargs="+", help="object keys (default: all six)")
+    s.add_argument(
+        "--max-grasps",
+        type=int,
+        default=100,
+        help="FC grasps drawn per object and design for the GQMs (default 100)",
+    )
+    s.add_argument("--seed", type=int, default=0, help="seed of the random draw")
+    s.add_argument(
+        "--drop-duplicate-roll",
+        action="store_true",
+        help="drop the roll 2π (a duplicate of 0) from the published roll list",
+    )
+    s.add_argument(
+        "--wrench-contacts",
+        choices=("patch", "link"),
+        default="patch",
+        help="Q_C1/Q_C2 contact points: every patch point (FC model, default) or "
+        "one per link (faster)",
+    )
+    s.add_argument("--no-picture", action="store_true", help="skip bruteforce_winners.png")
+    s.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
+    s.add_argument(
+        "--executor",
+        choices=("local", "inline", "ray"),
+        default="local",
+        help="local process pool (default), inline, or a Ray cluster",
+    )
+    s.add_argument("--address", help="Ray cluster address (with --executor ray)")
+    s.add_argument("--store", help="results database (default ~/.cache/handbench/results.sqlite)")
+    add_settings_flags(s)
+    s.set_defaults(func=cmd_bruteforce)
 
     s = sub.add_parser("objects", help="list objects or import a mesh")
     osub = s.add_subparsers(dest="objects_cmd", required=True, metavar="ACTION")
@@ -290,8 +455,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--gh", help="grasp hypothesis id or index to replay")
     s.add_argument("--out", required=True)
     s.add_argument("--size", default="1400x900", help="WxH pixels")
-    s.add_argument("--view", default="scene", choices=("scene", "map"),
-                   help="what to capture: the 3-D scene or the design map tab")
+    s.add_argument(
+        "--view",
+        default="scene",
+        choices=("scene", "map"),
+        help="what to capture: the 3-D scene or the design map tab",
+    )
     s.add_argument("--store", help="results database")
     s.set_defaults(func=cmd_screenshot)
     return p

@@ -147,6 +147,7 @@ def advance_stage(
         gap = np.linalg.norm(c_link[:, None, :] - sph[None, finite, :3], axis=-1)
         lb[:, finite] = gap - chain.reach[:, None] - sph[None, finite, 3]
     lb[~mask] = np.inf
+
     def evaluate(qq: np.ndarray, full: bool) -> tuple[list[int], list[int]]:
         """Exact gaps at ``qq`` by lazy evaluation; links within tol (object, self).
 
@@ -189,6 +190,7 @@ def advance_stage(
 
     q_safe: np.ndarray | None = None  # last q where every gap exceeded tol
     lb_safe = lb.copy()
+    rates_safe = np.zeros(3)
     for _ in range(settings.max_steps):
         stats.steps += 1
         touching_obj, touching_self = evaluate(q, True)

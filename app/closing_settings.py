@@ -35,7 +35,9 @@ class ClosingSettings:
 
     def __post_init__(self) -> None:
         if self.mode not in CLOSING_MODES:
-            raise SettingsError(f"closing mode {self.mode!r} unknown; choose one of {CLOSING_MODES}")
+            raise SettingsError(
+                f"closing mode {self.mode!r} unknown; choose one of {CLOSING_MODES}"
+            )
         if not (0 < self.stop_tol_mm <= 5):
             raise SettingsError(f"stop_tol_mm must be in (0, 5] mm, got {self.stop_tol_mm}")
         for name in ("thumb_rates", "tendon_ratios"):

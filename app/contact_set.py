@@ -10,11 +10,7 @@ import numpy as np
 LONG_FINGERS = ("index", "middle", "ring", "little")
 THUMB_LINKS = ("thumb_metacarpal", "thumb_proximal", "thumb_distal")
 PHALANGES = ("proximal", "middle", "distal")
-LINK_NAMES = (
-    ("palm",)
-    + THUMB_LINKS
-    + tuple(f"{f}_{p}" for f in LONG_FINGERS for p in PHALANGES)
-)
+LINK_NAMES = ("palm",) + THUMB_LINKS + tuple(f"{f}_{p}" for f in LONG_FINGERS for p in PHALANGES)
 
 
 def finger_of(link: str) -> str:

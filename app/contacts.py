@@ -40,7 +40,9 @@ class ContactSettings:
         if self.max_points_per_link < 1:
             raise SettingsError(f"max_points_per_link must be >= 1, got {self.max_points_per_link}")
         if not 0.2 <= self.sample_spacing_mm <= 5:
-            raise SettingsError(f"sample_spacing_mm must be in [0.2, 5], got {self.sample_spacing_mm}")
+            raise SettingsError(
+                f"sample_spacing_mm must be in [0.2, 5], got {self.sample_spacing_mm}"
+            )
 
 
 @lru_cache(maxsize=512)
@@ -100,8 +102,9 @@ def contacts_of_links(
     centroid = obj.centroid_object  # type: ignore[attr-defined]
     r_obj = obj.max_radius  # type: ignore[attr-defined]
     P, N, L, Pal = [], [], [], []
-    for name, shape, body, T, Tf in zip(names, shapes, bodies, T_object_links, T_link_fcl,
-                                        strict=True):
+    for name, shape, body, T, Tf in zip(
+        names, shapes, bodies, T_object_links, T_link_fcl, strict=True
+    ):
         Tb = T @ Tf
         # bounding-sphere cull: link reach from its FCL frame centre
         reach = _reach(shape)

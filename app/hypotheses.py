@@ -112,7 +112,8 @@ class Hypotheses:
             if 0 <= gh < len(self):
                 return int(gh)
             raise UnknownHypothesisError(
-                f"hypothesis index {gh} out of range: {self.object_key} has {len(self)} (0..{len(self) - 1})"
+                f"hypothesis index {gh} out of range: {self.object_key} has {len(self)} "
+                f"(0..{len(self) - 1})"
             )
         try:
             return self.ids.index(gh)

@@ -2,7 +2,7 @@
 
 Work unit (a *task*): one object, a chunk of its hypotheses, and the designs that still lack
 results for them. A worker computes each hypothesis' ``BaseGrasp`` once per CMC angle and
-then closes the thumb of every listed design on it (the cost model of docs/cost-model.md). The parent
+then closes the thumb of every listed design on it (docs/cost-model.md). The parent
 process is the only writer of the results store: one transaction per finished task, so a
 killed sweep loses at most the tasks in flight and never leaves half a task behind.
 """
@@ -127,16 +127,24 @@ def run_task(task: Task) -> list[tuple[int, str, GraspOutcome]]:
     obj = load_object(task.object_name)
     hyps = hypotheses_of(task.object_name, task.hypothesis_set)
     s = task.settings
-    base_kit = _kit(*task.designs[0].as_dict().values())  # type: ignore[arg-type]
     kits = [_kit(*d.as_dict().values()) for d in task.designs]  # type: ignore[arg-type]
     out: list[tuple[int, str, GraspOutcome]] = []
     bf = isinstance(hyps, BruteForceHypotheses)
     for i in task.gh:
-        if isinstance(hyps, BruteForceHypotheses):
-            base = simulate_base(base_kit, obj, hyps.approach_line(i), i, s, fingers=ALL_FINGERS)
-        else:
-            base = simulate_base(base_kit, obj, hyps, i, s)
-        for di, kit in enumerate(kits):
+        # the open thumb (part of the approach) depends on the CMC angle only: one base
+        # stage per (CMC angle, tilt), shared by every MCP angle (docs/cost-model.md)
+        bases: dict[tuple[float, str], BaseGrasp] = {}
+        for di, (d, kit) in enumerate(zip(task.designs, kits, strict=True)):
+            open_thumb = (d.cmc_deg, d.cmc_tilt)
+            base = bases.get(open_thumb)
+            if base is None:
+                if isinstance(hyps, BruteForceHypotheses):
+                    base = simulate_base(
+                        kit, obj, hyps.approach_line(i), i, s, fingers=ALL_FINGERS
+                    )
+                else:
+                    base = simulate_base(kit, obj, hyps, i, s)
+                bases[open_thumb] = base
             g = simulate_thumb(kit, obj, base, s)
             o = judge(g, obj, s, base.queries + g.queries)
             if bf:

@@ -34,9 +34,11 @@ def main() -> None:
     for k in (12, 24, 40):
         W = contact_set(rng, k)
         a = fc_and_epsilon(W)[0], is_force_closure_lp(W), positively_spans(W)
-        print(f"{k:>8} {len(W):>8} {timeit(fc_and_epsilon, W, 2):>9.1f} "
-              f"{timeit(is_force_closure_lp, W, 5):>7.1f} {timeit(positively_spans, W, 20):>8.2f}"
-              f"  {a[0] == a[1] == a[2]}")
+        print(
+            f"{k:>8} {len(W):>8} {timeit(fc_and_epsilon, W, 2):>9.1f} "
+            f"{timeit(is_force_closure_lp, W, 5):>7.1f} {timeit(positively_spans, W, 20):>8.2f}"
+            f"  {a[0] == a[1] == a[2]}"
+        )
 
 
 if __name__ == "__main__":

@@ -48,10 +48,14 @@ def per_core_rates(sample: int) -> None:
             nq_b += base.queries
             nq_t += g.queries
     print(f"sampled GHs                          : {nb} (every {sample}th of each object)")
-    print(f"base stage (approach + long fingers) : {nb / tb:8.1f} GH/s per core, "
-          f"{nq_b / nb:6.1f} FCL queries per GH")
-    print(f"thumb stage (per design)             : {nb / tt:8.1f} GH/s per core, "
-          f"{nq_t / nb:6.1f} FCL queries per GH")
+    print(
+        f"base stage (approach + long fingers) : {nb / tb:8.1f} GH/s per core, "
+        f"{nq_b / nb:6.1f} FCL queries per GH"
+    )
+    print(
+        f"thumb stage (per design)             : {nb / tt:8.1f} GH/s per core, "
+        f"{nq_t / nb:6.1f} FCL queries per GH"
+    )
     print(f"full closing (base + thumb)          : {nb / (tb + tt):8.1f} GH/s per core")
 
 
@@ -90,7 +94,9 @@ def main() -> None:
         print(f"the same, warm store                    : {dt:8.2f} s")
         if args.full:
             dt = timed_sweep(published_designs(), args.workers, tmp / "all.sqlite")
-            print(f"28-design sweep, cold                   : {dt:8.1f} s  ({args.workers} workers)")
+            print(
+                f"28-design sweep, cold                   : {dt:8.1f} s  ({args.workers} workers)"
+            )
         me, kids = peak_rss_mib()
         print(f"peak RSS: driver {me:.0f} MiB, largest worker {kids:.0f} MiB")
     finally:

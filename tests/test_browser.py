@@ -103,6 +103,13 @@ def test_page_draws_hand(server: ExplorerServer, browser: Any) -> None:
         import matplotlib.pyplot as plt
 
         assert not_blank((plt.imread(shot) * 255).astype(np.uint8))
+        # Share tab: save the view as PNG (written under shots_dir and sent as a download)
+        page.get_by_role("tab", name="Share").click()
+        assert "cmc=0&mcp=45&object=chips_can&gh=0" in s.share_panel.link.content
+        page.get_by_role("button", name="Save PNG of the view").click()
+        wait_until(lambda: "saved" in s.share_panel.saved.content, 30, "the saved PNG")
+        saved = list((BUILD / "shots").glob("handbench_c0_m45_chips_can_gh0_*.png"))
+        assert saved and not_blank((plt.imread(saved[0]) * 255).astype(np.uint8))
     finally:
         page.close()
 

@@ -22,8 +22,16 @@ from app.simulate import HandKit, simulate_base, simulate_thumb
 
 def can_hypotheses(target=(37.5, 0, 125.0), normal=(1.0, 0, 0), hint=(0, 1.0, 0), n_rays=28):
     return make_hypotheses(
-        "can", np.array(target), np.array(normal), np.array(hint),
-        np.array([0.41, 0, 0.91]), 0.2, n_rays, [0.0], (-20, -50), 15,
+        "can",
+        np.array(target),
+        np.array(normal),
+        np.array(hint),
+        np.array([0.41, 0, 0.91]),
+        0.2,
+        n_rays,
+        [0.0],
+        (-20, -50),
+        15,
     )
 
 
@@ -95,12 +103,20 @@ def test_final_angles_are_the_limit_of_fixed_step_closing(i: int) -> None:
     obstacles = Obstacles(list(obj.collision_objects()), 1)
     for finger in ("index", "middle", "ring"):
         ch = kit.chains[finger]
-        ours = close_finger(ch, kit.bodies(finger), base.T_object_palm, obstacles, s.closing,
-                            ClosingStats())
+        ours = close_finger(
+            ch, kit.bodies(finger), base.T_object_palm, obstacles, s.closing, ClosingStats()
+        )
         errors = []
         for h in (0.004, 0.0004):
-            ref = close_finger_naive(ch, kit.bodies(finger), base.T_object_palm, obstacles,
-                                     s.closing, ClosingStats(), step_rad=h)
+            ref = close_finger_naive(
+                ch,
+                kit.bodies(finger),
+                base.T_object_palm,
+                obstacles,
+                s.closing,
+                ClosingStats(),
+                step_rad=h,
+            )
             errors.append(np.rad2deg(np.abs(ours - ref)).max())
         assert errors[1] <= errors[0] + 1e-9 or errors[1] < 0.1, (finger, errors)
         assert errors[1] < 1.0, (finger, errors)
@@ -113,8 +129,9 @@ def test_a_finger_in_free_space_closes_to_its_limits() -> None:
         s = ClosingSettings(mode=mode)  # type: ignore[arg-type]
         for finger in ("thumb", "index", "little"):
             ch = kit.chains[finger]
-            q = close_finger(ch, kit.bodies(finger), np.eye(4), Obstacles([far], 1), s,
-                             ClosingStats())
+            q = close_finger(
+                ch, kit.bodies(finger), np.eye(4), Obstacles([far], 1), s, ClosingStats()
+            )
             assert np.allclose(q, ch.q_upper), (mode, finger)
 
 
@@ -125,8 +142,9 @@ def test_sequential_distal_contact_keeps_proximal_joints() -> None:
     # index tip at y ~ 164 at q = 0; a box just palmar of the tip region
     wall = fcl.CollisionObject(fcl.Box(60, 20, 10), fcl.Transform(np.array([21.0, 158.0, 40.0])))
     stats = ClosingStats()
-    q = close_finger(ch, kit.bodies("index"), np.eye(4), Obstacles([wall], 1), ClosingSettings(),
-                     stats)
+    q = close_finger(
+        ch, kit.bodies("index"), np.eye(4), Obstacles([wall], 1), ClosingSettings(), stats
+    )
     assert 0 < q[0] < ch.q_upper[0]
     assert q[1] == 0.0 and q[2] == 0.0
     assert stats.events == ["index:[0]:contact"]
@@ -138,8 +156,9 @@ def test_sequential_proximal_contact_then_distal_joints_close() -> None:
     ch = kit.chains["index"]
     bar = fcl.CollisionObject(fcl.Box(60, 8, 8), fcl.Transform(np.array([21.0, 95.0, 25.0])))
     stats = ClosingStats()
-    q = close_finger(ch, kit.bodies("index"), np.eye(4), Obstacles([bar], 1), ClosingSettings(),
-                     stats)
+    q = close_finger(
+        ch, kit.bodies("index"), np.eye(4), Obstacles([bar], 1), ClosingSettings(), stats
+    )
     assert 0 < q[0] < ch.q_upper[0]
     assert q[1] > 0.3  # the PIP closed afterwards
     assert stats.events[0] == "index:[0]:contact"

@@ -383,7 +383,10 @@ def test_evaluate_fc_uses_settings():
     res = evaluate_fc(cs, c, r, FCSettings(mu=0.4, n_edges=6), with_epsilon=True)
     assert res.n_points == len(cs) * 6 and res.is_fc
     # less friction, less ε
-    assert evaluate_fc(cs, c, r, FCSettings(mu=0.2), with_epsilon=True).epsilon < evaluate_fc(cs, c, r, with_epsilon=True).epsilon
+    assert (
+        evaluate_fc(cs, c, r, FCSettings(mu=0.2), with_epsilon=True).epsilon
+        < evaluate_fc(cs, c, r, with_epsilon=True).epsilon
+    )
 
 
 def test_fast_decision_matches_qhull_on_the_analytic_cases():

@@ -10,8 +10,14 @@ from app.hypotheses import cone_rays, make_hypotheses, palm_orientation
 from app.objects import OBJECT_KEYS, load_object
 from app.sweep import cached_hypotheses
 
-N_GH = {"small_marker": 1026, "plastic_pear": 648, "washer": 1026, "chips_can": 420,
-        "coffee_can": 420, "power_drill": 720}
+N_GH = {
+    "small_marker": 1026,
+    "plastic_pear": 648,
+    "washer": 1026,
+    "chips_can": 420,
+    "coffee_can": 420,
+    "power_drill": 720,
+}
 
 
 @pytest.mark.parametrize("key", OBJECT_KEYS)
@@ -20,10 +26,15 @@ def test_counts_ids_and_determinism(key: str) -> None:
     assert len(h) == N_GH[key] == load_object(key).spec.setup.n_gh
     assert len(set(h.ids)) == len(h)
     again = make_hypotheses(
-        key, h.target_object, load_object(key).spec.normal_object,
-        load_object(key).spec.palm_y_hint_object, load_object(key).spec.setup.hand_vector_palm,
-        load_object(key).spec.setup.cone_angle_rad, load_object(key).spec.setup.n_rays,
-        load_object(key).spec.setup.standoffs_mm, load_object(key).spec.setup.roll_range_deg,
+        key,
+        h.target_object,
+        load_object(key).spec.normal_object,
+        load_object(key).spec.palm_y_hint_object,
+        load_object(key).spec.setup.hand_vector_palm,
+        load_object(key).spec.setup.cone_angle_rad,
+        load_object(key).spec.setup.n_rays,
+        load_object(key).spec.setup.standoffs_mm,
+        load_object(key).spec.setup.roll_range_deg,
         load_object(key).spec.setup.n_rolls,
     )
     assert again.ids == h.ids and np.array_equal(again.R_object_palm, h.R_object_palm)

@@ -18,13 +18,37 @@ from app.settings import SimSettings
 from app.store import ResultStore
 from app.sweep import cached_hypotheses, design_key, object_key
 
-ARGS = ["--cmc", "0,45", "--mcp", "45", "--object", "small_marker", "chips_can",
-        "--gh-stride", "23", "--chunk", "4"]
+ARGS = [
+    "--cmc",
+    "0,45",
+    "--mcp",
+    "45",
+    "--object",
+    "small_marker",
+    "chips_can",
+    "--gh-stride",
+    "23",
+    "--chunk",
+    "4",
+]
 
 
 def run_cli(tmp: Path, out: str, store: str, workers: str = "2") -> None:
-    assert main(["sweep", *ARGS, "--workers", workers, "--out", str(tmp / out),
-                 "--store", str(tmp / store)]) == 0
+    assert (
+        main(
+            [
+                "sweep",
+                *ARGS,
+                "--workers",
+                workers,
+                "--out",
+                str(tmp / out),
+                "--store",
+                str(tmp / store),
+            ]
+        )
+        == 0
+    )
 
 
 @pytest.mark.slow
@@ -52,10 +76,22 @@ def test_small_sweep_writes_tables_and_plots(tmp_path: Path, capsys) -> None:
 def test_kill_minus_nine_then_resume_gives_the_same_table(tmp_path: Path) -> None:
     run_cli(tmp_path, "ref", "ref.sqlite")
     store = tmp_path / "killed.sqlite"
-    cmd = [sys.executable, "-m", "app.cli", "sweep", *ARGS, "--workers", "2",
-           "--out", str(tmp_path / "killed"), "--store", str(store)]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            start_new_session=True)
+    cmd = [
+        sys.executable,
+        "-m",
+        "app.cli",
+        "sweep",
+        *ARGS,
+        "--workers",
+        "2",
+        "--out",
+        str(tmp_path / "killed"),
+        "--store",
+        str(store),
+    ]
+    proc = subprocess.Popen(
+        cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True
+    )
     deadline = time.time() + 120
     # wait until some, but not all, outcomes are stored, then kill the whole process group
     stored = 0
@@ -65,9 +101,10 @@ def test_kill_minus_nine_then_resume_gives_the_same_table(tmp_path: Path) -> Non
             try:
                 with ResultStore(store, readonly=True) as st:
                     stored = sum(
-                        st.count(design_key(ThumbDesign(c, 45)), object_key(k),
-                                 SimSettings().key())
-                        for c in (0, 45) for k in ("small_marker", "chips_can"))
+                        st.count(design_key(ThumbDesign(c, 45)), object_key(k), SimSettings().key())
+                        for c in (0, 45)
+                        for k in ("small_marker", "chips_can")
+                    )
             except Exception:  # noqa: BLE001 - the db may be mid-creation
                 stored = 0
         if stored > 0 or proc.poll() is not None:

@@ -378,7 +378,10 @@ class Session:
         centre = (lo + hi) / 2
         radius = float(np.linalg.norm(hi - lo)) / 2 + 30.0
         R = T[:3, :3]
-        view = R @ np.array([1.0, -0.25, -0.15]) + np.array([0.0, 0.0, 0.35])
+        if self.obj.spec.grasp_type == "CG":  # from above the back of the hand: the wrap
+            view = R @ np.array([0.7, -0.2, -0.8]) + np.array([0.0, 0.0, 1.0])
+        else:  # pinch: from the thumb side, at the height of the pads
+            view = R @ np.array([1.0, -0.25, -0.15]) + np.array([0.0, 0.0, 0.35])
         view /= np.linalg.norm(view)
         up = np.array([0.0, 0.0, 1.0])
         right = np.cross(-view, up)

@@ -122,8 +122,9 @@ class BoxShape:
         pad = inset * r
         lo, hi = self.lo_link + r + pad, self.hi_link - r - pad
         sphere = trimesh.creation.icosphere(subdivisions=2, radius=r)
-        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                            for z in (lo[2], hi[2])])
+        corners = np.array(
+            [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+        )
         pts = (sphere.vertices[None, :, :] + corners[:, None, :]).reshape(-1, 3)
         return trimesh.convex.convex_hull(pts)
 

@@ -133,8 +133,9 @@ class PolygonSdfTable:
     h/2 near corners and far less on smooth parts (tests: |sdf| on mesh vertices < 0.3 mm).
     """
 
-    def __init__(self, verts: np.ndarray, real_edge: np.ndarray, h: float = 0.2,
-                 pad: float = 40.0) -> None:
+    def __init__(
+        self, verts: np.ndarray, real_edge: np.ndarray, h: float = 0.2, pad: float = 40.0
+    ) -> None:
         self.verts, self.real, self.h, self.pad = verts, real_edge, h, pad
         self._grid: np.ndarray | None = None
 
@@ -147,10 +148,12 @@ class PolygonSdfTable:
         gy = lo[1] + self.h * np.arange(self.shape[1])
         X, Y = np.meshgrid(gx, gy, indexing="ij")
         q = np.column_stack([X.ravel(), Y.ravel()])
-        vals = np.concatenate([
-            polygon_sdf_2d(q[i : i + 20000], self.verts, self.real)
-            for i in range(0, len(q), 20000)
-        ])
+        vals = np.concatenate(
+            [
+                polygon_sdf_2d(q[i : i + 20000], self.verts, self.real)
+                for i in range(0, len(q), 20000)
+            ]
+        )
         return vals.reshape(self.shape)
 
     def __call__(self, q: np.ndarray) -> np.ndarray:

@@ -1,0 +1,236 @@
+"""The ten GQMs: analytic cases, ε against a QP, the hand Jacobian against finite differences."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from app.contact_set import ContactSet
+from app.force_closure import fc_and_epsilon, primitive_wrenches
+from app.force_closure_lp import distance_to_hull
+from app.gqm import GQM_NAMES, GQMSettings, compute_gqms
+from app.gqm.a1 import q_a1
+from app.gqm.a2 import q_a2
+from app.gqm.a3 import q_a3
+from app.gqm.b1 import q_b1
+from app.gqm.b2 import q_b2
+from app.gqm.b3 import q_b3
+from app.gqm.c1 import q_c1
+from app.gqm.c2 import q_c2
+from app.gqm.contacts import link_contacts
+from app.gqm.d1 import q_d1
+from app.gqm.d2 import hand_object_jacobian, q_d2
+from app.gqm.grasp_matrix import grasp_matrix, grasp_singular_values
+from app.gqm.hand_jacobian import hand_jacobian
+from app.gqm.wrench_space import grasp_wrench_space, wrench_hull
+from app.hand.model import build_hand
+from app.hypotheses import rotation_about
+
+R_OBJ = 30.0
+
+
+def ring(n: int, r: float = R_OBJ, z: float = 0.0) -> np.ndarray:
+    """(n, 3) points evenly on a circle of radius r in the plane z."""
+    a = 2 * np.pi * np.arange(n) / n
+    return np.stack([r * np.cos(a), r * np.sin(a), np.full(n, z)], axis=1)
+
+
+def random_rotation(rng: np.random.Generator) -> np.ndarray:
+    return rotation_about(rng.normal(size=3), float(rng.uniform(0, np.pi)))
+
+
+# ----------------------------------------------------------------------------- Q_A
+def test_grasp_matrix_maps_forces_to_wrenches() -> None:
+    rng = np.random.default_rng(0)
+    p, f, c = rng.normal(size=(4, 3)) * 20, rng.normal(size=(4, 3)), rng.normal(size=3)
+    G = grasp_matrix(p, c, 25.0)
+    w = G @ f.ravel()
+    assert np.allclose(w[:3], f.sum(0))
+    assert np.allclose(w[3:], np.cross(p - c, f).sum(0) / 25.0)
+
+
+def test_symmetric_three_contacts_singular_values() -> None:
+    """3 contacts at 120° on a circle of radius r about c: G Gᵀ = diag(3, 3, 3, 1.5, 1.5, 3)."""
+    sv = grasp_singular_values(ring(3), np.zeros(3), R_OBJ)
+    assert np.allclose(np.sort(sv), np.sqrt([1.5, 1.5, 3, 3, 3, 3]))
+    assert q_a1(sv) == pytest.approx(math.sqrt(1.5))
+    assert q_a2(sv) == pytest.approx(13.5)  # √(3⁴ · 1.5²)
+    assert q_a3(sv) == pytest.approx(1 / math.sqrt(2))
+
+
+def test_two_contacts_are_singular() -> None:
+    sv = grasp_singular_values(ring(2), np.zeros(3), R_OBJ)  # squeezing along the line is free
+    assert q_a1(sv) == pytest.approx(0.0, abs=1e-12)
+    assert q_a2(sv) == pytest.approx(0.0, abs=1e-12) and q_a3(sv) == pytest.approx(0, abs=1e-12)
+
+
+# ----------------------------------------------------------------------------- Q_B
+def test_q_b1_centroid() -> None:
+    assert q_b1(ring(3), np.zeros(3), R_OBJ) == pytest.approx(1.0)
+    assert q_b1(ring(4) + [0, 0, 15.0], np.zeros(3), R_OBJ) == pytest.approx(0.5)
+    assert q_b1(ring(4) + [0, 0, 90.0], np.zeros(3), R_OBJ) == 0.0  # clipped
+
+
+def test_q_b2_area_in_any_plane() -> None:
+    tri = np.array([[0.0, 0, 0], [30, 0, 0], [0, 40, 0]])
+    rng = np.random.default_rng(1)
+    R = random_rotation(rng)
+    assert q_b2(tri @ R.T + [5, 6, 7]) == pytest.approx(600.0)
+    # a point inside the triangle does not change the convex polygon
+    assert q_b2(np.vstack([tri, [[5.0, 5, 0]]])) == pytest.approx(600.0)
+    # a regular hexagon of circumradius 30
+    assert q_b2(ring(6)) == pytest.approx(1.5 * math.sqrt(3) * 30**2)
+    assert q_b2(ring(2)) == 0.0 and q_b2(np.array([[0.0, 0, 0], [1, 1, 1], [2, 2, 2]])) == 0.0
+
+
+def test_q_b3_shape() -> None:
+    for n in (3, 4, 5, 8):
+        assert q_b3(ring(n)) == pytest.approx(1.0)  # regular polygons
+    # right isosceles triangle: angles 90, 45, 45 against 60: Σ = 60°, θ_max = 120 + 120
+    assert q_b3(np.array([[0.0, 0, 0], [10, 0, 0], [0, 10, 0]])) == pytest.approx(0.75)
+    flat = np.array([[0.0, 0, 0], [100, 0, 0], [50, 0.5, 0]])
+    assert 0.0 <= q_b3(flat) < 0.05
+    assert q_b3(ring(2)) == 0.0
+
+
+# ----------------------------------------------------------------------------- Q_C
+def fc_sphere_contacts() -> tuple[np.ndarray, np.ndarray]:
+    """Six contacts on a sphere of radius R_OBJ at ±axes, a little off, normals inward."""
+    p = np.vstack([np.eye(3), -np.eye(3)]) * R_OBJ
+    p = p + np.array([[0, 3, 0], [0, 0, 3], [3, 0, 0], [0, -3, 0], [0, 0, -3], [-3, 0, 0]])
+    p = R_OBJ * p / np.linalg.norm(p, axis=1, keepdims=True)
+    return p, -p / R_OBJ
+
+
+def test_q_c1_matches_fc_and_epsilon_and_qp() -> None:
+    p, n = fc_sphere_contacts()
+    W = primitive_wrenches(p, n, np.zeros(3), R_OBJ)
+    ws = wrench_hull(W)
+    eps = q_c1(ws)
+    fc, eps_ref = fc_and_epsilon(W)
+    assert fc and eps > 0 and eps == pytest.approx(eps_ref, rel=1e-12)
+    rng = np.random.default_rng(2)
+    U = rng.normal(size=(12, 6))
+    U /= np.linalg.norm(U, axis=1, keepdims=True)
+    for u in U:  # points at 0.98 ε in random directions are inside the hull
+        assert distance_to_hull(W, 0.98 * eps * u)[0] < 1e-6
+    k = int(np.argmin(-ws.equations[:, -1]))
+    u_star = ws.equations[k, :6]
+    assert distance_to_hull(W, 1.05 * eps * u_star)[0] > 1e-4  # ... beyond the closest facet
+    # not FC (all contacts on one hemisphere, pushing the same way): Q_C1 = 0
+    W_half = primitive_wrenches(p[:3], n[:3], np.zeros(3), R_OBJ)
+    assert q_c1(wrench_hull(W_half)) == 0.0
+
+
+def test_q_c2_cross_polytope_volume() -> None:
+    W = np.vstack([np.eye(6), -np.eye(6)])
+    assert q_c2(wrench_hull(W)) == pytest.approx(2**6 / math.factorial(6))
+    assert q_c2(wrench_hull(W[:6])) == 0.0  # 6 points: no 6-D volume
+
+
+# ----------------------------------------------------------------------------- Q_D
+def test_q_d1_posture() -> None:
+    lo, hi = np.zeros(4), np.array([1.0, 2.0, 3.0, 4.0])
+    assert q_d1(0.5 * (lo + hi), lo, hi, range(4)) == pytest.approx(1.0)
+    assert q_d1(lo, lo, hi, range(4)) == pytest.approx(0.0)
+    assert q_d1(hi, lo, hi, range(4)) == pytest.approx(0.0)
+    assert q_d1(0.25 * hi, lo, hi, range(4)) == pytest.approx(0.5)
+    assert q_d1(np.array([0.5, 0, 0, 0]), lo, hi, [0]) == pytest.approx(1.0)  # joint subset
+
+
+def _grasp_on_hand(seed: int) -> tuple[object, SimpleNamespace, np.ndarray]:
+    """A hand at a random mid posture, contacts on 5 links, posed by a random T."""
+    hand = build_hand(15, 60)
+    rng = np.random.default_rng(seed)
+    q = hand.q_lower + rng.uniform(0.2, 0.8, 15) * (hand.q_upper - hand.q_lower)
+    links = ["palm", "thumb_distal", "index_distal", "middle_middle", "ring_proximal"]
+    poses = hand.link_poses(q)
+    p_link = rng.uniform(-3, 3, size=(len(links), 3)) + [0, 12, 0]
+    p_palm = np.array(
+        [poses[hand.link_index[n]] @ np.append(pl, 1) for n, pl in zip(links, p_link, strict=True)]
+    )[:, :3]
+    T = np.eye(4)
+    T[:3, :3] = random_rotation(rng)
+    T[:3, 3] = rng.normal(size=3) * 50
+    p_obj = p_palm @ T[:3, :3].T + T[:3, 3]
+    link = np.empty(len(links), dtype=object)
+    link[:] = links
+    n_obj = rng.normal(size=(len(links), 3))
+    n_obj /= np.linalg.norm(n_obj, axis=1, keepdims=True)
+    cs = ContactSet(p_obj, n_obj, link, np.ones(len(links), bool))
+    return hand, SimpleNamespace(q=q, T_object_palm=T, contacts=cs), p_link
+
+
+def test_hand_jacobian_finite_differences() -> None:
+    hand, g, p_link = _grasp_on_hand(3)
+    lc = link_contacts(g.contacts)
+    J = hand_jacobian(hand, g.q, g.T_object_palm, lc.links, lc.p)
+    order = {n: i for i, n in enumerate(["palm", "thumb_distal", "index_distal",
+                                          "middle_middle", "ring_proximal"])}  # fmt: skip
+    pl = np.array([p_link[order[n]] for n in lc.links])
+
+    def points(q: np.ndarray) -> np.ndarray:
+        poses = g.T_object_palm @ hand.link_poses(q)
+        return np.concatenate(
+            [(poses[hand.link_index[n]] @ np.append(x, 1))[:3] for n, x in zip(lc.links, pl,
+                                                                                  strict=True)]
+        )  # fmt: skip
+
+    h = 1e-6
+    J_fd = np.stack(
+        [(points(g.q + h * e) - points(g.q - h * e)) / (2 * h) for e in np.eye(15)], axis=1
+    )
+    assert np.allclose(J, J_fd, atol=1e-5)
+    assert np.allclose(J[:3], 0.0)  # the palm does not move
+
+
+def test_q_d2_frame_invariant_and_bounded() -> None:
+    hand, g, _ = _grasp_on_hand(4)
+    lc = link_contacts(g.contacts)
+    c = np.array([1.0, 2.0, 3.0])
+    G = grasp_matrix(lc.p, c, R_OBJ)
+    J = hand_jacobian(hand, g.q, g.T_object_palm, lc.links, lc.p)
+    d2 = q_d2(G, J)
+    assert 0.0 < d2 <= 1.0
+    # the same grasp seen from another object frame
+    T2 = np.eye(4)
+    T2[:3, :3] = random_rotation(np.random.default_rng(9))
+    T2[:3, 3] = [10.0, -20.0, 5.0]
+    p2 = lc.p @ T2[:3, :3].T + T2[:3, 3]
+    G2 = grasp_matrix(p2, T2[:3, :3] @ c + T2[:3, 3], R_OBJ)
+    J2 = hand_jacobian(hand, g.q, T2 @ g.T_object_palm, lc.links, p2)
+    assert q_d2(G2, J2) == pytest.approx(d2, rel=1e-9)
+    # H q̇ is the least-squares object twist consistent with the contact velocities
+    H = hand_object_jacobian(G, J)
+    qd = np.random.default_rng(5).normal(size=15)
+    nu = np.linalg.lstsq(G.T, J @ qd, rcond=None)[0]
+    assert np.allclose(H @ qd, nu)
+
+
+# ----------------------------------------------------------------------------- all ten
+def test_compute_gqms_keys_and_link_model() -> None:
+    hand, g, _ = _grasp_on_hand(6)
+    obj = SimpleNamespace(centroid_object=np.mean(g.contacts.p_object, axis=0), max_radius=80.0)
+    vals = compute_gqms(g, obj, hand)  # type: ignore[arg-type]
+    assert tuple(vals) == GQM_NAMES and all(np.isfinite(v) for v in vals.values())
+    for k in ("Q_A3", "Q_B1", "Q_B3", "Q_D1", "Q_D2"):
+        assert 0.0 <= vals[k] <= 1.0
+    assert vals["Q_D1"] == pytest.approx(q_d1(g.q, hand.q_lower, hand.q_upper, range(15)))
+    # one contact per link: the 'patch' and 'link' wrench spaces coincide here
+    link = compute_gqms(g, obj, hand, GQMSettings(wrench_contacts="link"))  # type: ignore[arg-type]
+    assert link["Q_C2"] == pytest.approx(vals["Q_C2"]) and link["Q_C1"] == vals["Q_C1"]
+
+
+def test_link_contacts_reduce_patches() -> None:
+    p = np.array([[0.0, 0, 0], [2, 0, 0], [10, 0, 0], [5, 5, 5]])
+    n = np.array([[0.0, 0, 1], [0, 1, 0], [1, 0, 0], [0, 0, -1]])
+    link = np.array(["index_distal", "index_distal", "palm", "thumb_distal"], dtype=object)
+    lc = link_contacts(ContactSet(p, n, link, np.ones(4, bool)))
+    assert lc.links == ("palm", "thumb_distal", "index_distal")  # LINK_NAMES order
+    assert np.allclose(lc.p[2], [1, 0, 0])
+    assert np.allclose(lc.n[2], np.array([0, 1, 1]) / math.sqrt(2))
+    ws = grasp_wrench_space(lc.p, lc.n, np.zeros(3), 10.0, 0.4, 8)
+    assert ws.W.shape == (3 * 8, 6)
