@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -88,22 +89,24 @@ def add_design_flags(parser: argparse.ArgumentParser, required: bool = True) -> 
 
 
 def parse_angle_list(text: str, name: str) -> list[float]:
-    """'0,15,30' or a range with a step 'start:stop:step' (stop included) -> degrees."""
+    """'0,15,30' or a range with a step 'start:stop:step' (stop included) -> degrees.
+
+    Range values are rounded to 1e-9° so that '0:0.3:0.1' gives exactly 0.3 (the same design
+    key as a typed 0.3)."""
+    forms = f"--{name} takes a comma list ('0,15,30') or start:stop:step ('0:45:5')"
     try:
         if ":" in text:
             a, b, s = (float(x) for x in text.split(":"))
-            if s <= 0 or b < a:
+            if not all(math.isfinite(x) for x in (a, b, s)) or s <= 0 or b < a:
                 raise ValueError
-            n = int(round((b - a) / s))
-            vals = [a + k * s for k in range(n + 1) if a + k * s <= b + 1e-9]
+            n = int(math.floor((b - a) / s + 1e-9))
+            vals = [round(a + k * s, 9) for k in range(n + 1)]
         else:
             vals = [float(x) for x in text.split(",") if x.strip()]
     except ValueError:
-        raise SettingsError(
-            f"--{name} takes a comma list ('0,15,30') or start:stop:step ('0:45:5'), got {text!r}"
-        ) from None
+        raise SettingsError(f"{forms}, got {text!r}") from None
     if not vals:
-        raise SettingsError(f"--{name} is empty")
+        raise SettingsError(f"--{name} is empty; {forms}")
     return vals
 
 

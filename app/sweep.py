@@ -139,9 +139,7 @@ def run_task(task: Task) -> list[tuple[int, str, GraspOutcome]]:
             base = bases.get(open_thumb)
             if base is None:
                 if isinstance(hyps, BruteForceHypotheses):
-                    base = simulate_base(
-                        kit, obj, hyps.approach_line(i), i, s, fingers=ALL_FINGERS
-                    )
+                    base = simulate_base(kit, obj, hyps.approach_line(i), i, s, fingers=ALL_FINGERS)
                 else:
                     base = simulate_base(kit, obj, hyps, i, s)
                 bases[open_thumb] = base
@@ -157,9 +155,9 @@ def run_task(task: Task) -> list[tuple[int, str, GraspOutcome]]:
 class Executor:
     """Runs tasks and yields their results as they finish."""
 
-    def run(self, tasks: Sequence[Task], cancel: threading.Event | None) -> Iterator[
-        tuple[Task, list[tuple[int, str, GraspOutcome]]]
-    ]:
+    def run(
+        self, tasks: Sequence[Task], cancel: threading.Event | None
+    ) -> Iterator[tuple[Task, list[tuple[int, str, GraspOutcome]]]]:
         raise NotImplementedError
 
     def close(self) -> None:
@@ -250,8 +248,12 @@ class Progress:
                 f"[{bar}] {self.done}/{self.total} {self.label} "
                 f"{rate:,.0f}/s elapsed {el:.0f}s eta {eta:.0f}s"
             )
-            print(("\r" if self.tty else "") + msg, end="" if self.tty else "\n", file=self.stream,
-                  flush=True)
+            print(
+                ("\r" if self.tty else "") + msg,
+                end="" if self.tty else "\n",
+                file=self.stream,
+                flush=True,
+            )
 
     def close(self) -> None:
         if self.tty:
