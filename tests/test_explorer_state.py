@@ -64,3 +64,120 @@ def test_score_table_partial() -> None:
     md = snapshot_markdown(s)
     assert "CMC 15°, MCP 60°" in md and "computing 30/1026" in md
     assert "(partial)" in md and "59.5" in md  # chips_can S_GAS = (200 + 50) / 420
+
+
+def test_link_tilt() -> None:
+    s = UrlState(30.0, 75.0, "chips_can", "17", tilt="radial")
+    assert s.query() == "?cmc=30&mcp=75&object=chips_can&gh=17&tilt=radial"
+    assert parse_query(s.query()) == s
+    assert parse_query("?cmc=10").tilt is None  # keep the current tilt (ulnar by default)
+    assert parse_query("?tilt=ulnar").tilt == "ulnar"
+    with pytest.raises(UrlStateError, match="tilt"):
+        parse_query("?tilt=sideways")
+
+
+def test_screenshot_passes_tilt(monkeypatch: pytest.MonkeyPatch) -> None:
+    import argparse
+
+    from app.explorer import screenshot
+
+    seen: list[UrlState] = []
+
+    def fake(out, state, *a, **k):  # noqa: ANN001, ANN002, ANN003, ANN202
+        seen.append(state)
+        return out
+
+    monkeypatch.setattr(screenshot, "take_screenshot", fake)
+    ns = argparse.Namespace(cmc=15.0, mcp=60.0, object="chips_can", gh=None, out="x.png",
+                            size="400x300", view="map", store=None, cmc_tilt="radial")  # fmt: skip
+    assert screenshot.screenshot_cli(ns) == 0
+    assert seen[0].tilt == "radial" and "tilt=radial" in seen[0].query()
+
+
+class _FakeStore:
+    """The two store reads of the design map: described designs and their summaries."""
+
+    def __init__(self, designs: dict[str, tuple[dict, dict]]) -> None:
+        self._d = designs
+
+    def designs(self) -> list[tuple[str, dict]]:
+        return [(k, meta) for k, (meta, _) in self._d.items()]
+
+    def summary(self, design_key: str, settings_key: str) -> dict:
+        return self._d.get(design_key, ({}, {}))[1]
+
+
+def _write_reference(path, objects, settings_key: str, rows) -> None:  # noqa: ANN001
+    import json
+
+    from app.hand.data import load_hand_dims
+    from app.report import write_table_csv
+    from app.sweep import cached_hypotheses
+
+    write_table_csv(rows, path / "table.csv", objects)
+    meta = {
+        "settings_key": settings_key,
+        "hand_hash": load_hand_dims().content_hash,
+        "engine_version": 3,
+        "objects": list(objects),
+        "n_gh": {k: len(cached_hypotheses(k)) for k in objects},
+    }
+    (path / "meta.json").write_text(json.dumps(meta))
+
+
+def test_reference_layer(tmp_path) -> None:  # noqa: ANN001
+    from typing import cast
+
+    from app.design import ThumbDesign
+    from app.explorer.map_data import TOTAL, map_points
+    from app.explorer.panel_map import render_map, table_markdown
+    from app.explorer.panel_score import read_snapshot, snapshot_markdown
+    from app.objects import load_object
+    from app.scores import DesignScore, ObjectScore
+    from app.settings import SimSettings
+    from app.store import ResultStore
+    from app.sweep import cached_hypotheses, design_key, object_key
+
+    objs = ("chips_can",)
+    n = len(cached_hypotheses("chips_can"))
+    types = {"chips_can": load_object("chips_can").spec.grasp_type}
+
+    def score(n_fc: int, n_c: int) -> DesignScore:
+        return DesignScore({"chips_can": ObjectScore(n, n_fc, n_c)}, types)
+
+    ref_rows = [score(n // 2, n // 4).to_row(0, 0), score(n, n // 3).to_row(15, 60)]
+    settings = SimSettings()
+    good, bad = tmp_path / "good", tmp_path / "bad"
+    good.mkdir()
+    bad.mkdir()
+    _write_reference(good, objs, settings.key(), ref_rows)
+    _write_reference(bad, objs, "0123456789abcdef", ref_rows)
+
+    # the user's store has (15, 60) complete: its score wins over the shipped row
+    d = ThumbDesign(15, 60)
+    store = cast(
+        ResultStore,
+        _FakeStore({design_key(d): (d.as_dict(), {object_key("chips_can"): (n, 7, 3)})}),
+    )
+    pts = map_points(store, objs, settings, ref_dir=good)
+    assert [(p.cmc_deg, p.mcp_deg, p.source) for p in pts] == [
+        (0.0, 0.0, "shipped"),
+        (15.0, 60.0, "store"),
+    ]
+    assert pts[0].score.objects["chips_can"] == ObjectScore(n, n // 2, n // 4)  # counts exact
+    assert pts[1].score.objects["chips_can"] == ObjectScore(n, 7, 3)
+    md = table_markdown(pts)
+    assert "| shipped |" in md and "| store |" in md and "docs/results" in md
+    assert pts[0].label.endswith("(shipped)")
+    assert render_map(pts, TOTAL, (0.0, 45.0), size=(300, 330)).shape == (330, 300, 3)
+
+    # a mismatching settings key, another tilt or other settings: the table is ignored
+    assert [p.source for p in map_points(store, objs, settings, ref_dir=bad)] == ["store"]
+    assert [p.source for p in map_points(store, objs, settings, "radial", good)] == []
+
+    # the Live S_GAS panel shows a shipped design's row at once, marked as such
+    empty = cast(ResultStore, _FakeStore({}))
+    snap = read_snapshot(empty, ThumbDesign(0, 0), objs, settings, ref_dir=good)
+    assert snap.reference is not None and "shipped reference sweep" in snapshot_markdown(snap)
+    assert read_snapshot(empty, ThumbDesign(0, 0), objs, settings, ref_dir=bad).reference is None
+    assert read_snapshot(empty, ThumbDesign(5, 5), objs, settings, ref_dir=good).reference is None

@@ -5,7 +5,9 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
+from app.explorer.reference import reference_scores
 from app.objects import load_object
 from app.scores import DesignScore, ObjectScore
 from app.settings import SimSettings
@@ -24,6 +26,14 @@ class MapPoint:
     cmc_deg: float
     mcp_deg: float
     score: DesignScore
+    source: str = "store"
+    """'store' (the user's results) or 'shipped' (the reference sweep in docs/results)."""
+
+    @property
+    def label(self) -> str:
+        """'CMC 15°, MCP 60°' (+ ' (shipped)'): the design picker's option."""
+        tag = " (shipped)" if self.source == "shipped" else ""
+        return f"CMC {self.cmc_deg:g}°, MCP {self.mcp_deg:g}°{tag}"
 
 
 def metric_choices(objects: Sequence[str]) -> tuple[str, ...]:
@@ -63,3 +73,20 @@ def complete_designs(
         out.append(MapPoint(float(meta["cmc_deg"]), float(meta["mcp_deg"]), score))
     out.sort(key=lambda p: (p.cmc_deg, p.mcp_deg))
     return out
+
+
+def map_points(
+    store: ResultStore,
+    objects: Sequence[str],
+    settings: SimSettings,
+    tilt: str = "ulnar",
+    ref_dir: Path | None = None,
+) -> list[MapPoint]:
+    """The store's complete designs, plus the shipped reference designs the store lacks
+    (when the shipped table applies to ``settings``, ``tilt`` and ``objects``)."""
+    pts = complete_designs(store, objects, settings, tilt)
+    have = {(p.cmc_deg, p.mcp_deg) for p in pts}
+    ref = reference_scores(objects, settings, tilt, ref_dir)
+    pts += [MapPoint(c, m, sc, "shipped") for (c, m), sc in ref.items() if (c, m) not in have]
+    pts.sort(key=lambda p: (p.cmc_deg, p.mcp_deg))
+    return pts

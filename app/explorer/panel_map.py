@@ -7,6 +7,7 @@ import io
 import math
 import threading
 from collections.abc import Callable, Sequence
+from pathlib import Path
 
 import matplotlib
 
@@ -21,10 +22,11 @@ from app.design_map import interpolate_map  # noqa: E402
 from app.explorer.map_data import (  # noqa: E402
     TOTAL,
     MapPoint,
-    complete_designs,
+    map_points,
     metric_choices,
     metric_value,
 )
+from app.explorer.reference import SOURCE_LABEL  # noqa: E402
 from app.settings import SimSettings  # noqa: E402
 from app.store import ResultStore  # noqa: E402
 
@@ -41,7 +43,11 @@ def render_map(
     m = np.array([p.mcp_deg for p in points])
     v = np.array([metric_value(p.score, metric) for p in points])
     ok = np.isfinite(v)
+    shipped = np.array([p.source == "shipped" for p in points], bool)
+    n_ship = int((ok & shipped).sum())
     title = f"{metric} (%) — {int(ok.sum())} computed designs"
+    if n_ship:
+        title += f"\n({n_ship} of them from the shipped reference, ◇)"
     if ok.sum() >= 3:
         try:
             gc, gm, Z = interpolate_map(c[ok], m[ok], v[ok], step_deg=1.0)
@@ -51,7 +57,12 @@ def render_map(
             title += f"\n(no interpolation: {e})"
     elif len(points):
         title += "\n(3 or more designs needed for contours)"
-    ax.scatter(c, m, s=22, c="white", edgecolors="black", linewidths=0.8, label="computed")
+    if (~shipped).any():
+        ax.scatter(c[~shipped], m[~shipped], s=22, c="white", edgecolors="black",
+                   linewidths=0.8, label="your store")  # fmt: skip
+    if shipped.any():
+        ax.scatter(c[shipped], m[shipped], s=26, marker="D", c="lightgrey", edgecolors="dimgray",
+                   linewidths=0.8, label="shipped reference")  # fmt: skip
     for ci, mi, vi in zip(c, m, v, strict=True):
         if math.isfinite(vi):
             ax.annotate(f"{vi:.0f}", (ci, mi), textcoords="offset points", xytext=(4, 3),
@@ -74,20 +85,22 @@ def render_map(
 
 
 def table_markdown(points: Sequence[MapPoint]) -> str:
-    """Computed designs: CMC, MCP, PP, CG, total."""
+    """Computed designs: CMC, MCP, PP, CG, total, and where the scores come from."""
 
     def f(x: float | None) -> str:
         return "–" if x is None or math.isnan(x) else f"{x:.1f}"
 
-    rows = ["| CMC | MCP | PP | CG | total |", "|---:|---:|---:|---:|---:|"]
+    rows = ["| CMC | MCP | PP | CG | total | source |", "|---:|---:|---:|---:|---:|---|"]
     for p in points:
         s = p.score
         rows.append(
             f"| {p.cmc_deg:g} | {p.mcp_deg:g} | {f(s.pp_sgas_pct)} | {f(s.cg_sgas_pct)} | "
-            f"**{f(s.total_sgas_pct)}** |"
+            f"**{f(s.total_sgas_pct)}** | {'store' if p.source == 'store' else 'shipped'} |"
         )
     if not points:
-        rows.append("| – | – | – | – | – |")
+        rows.append("| – | – | – | – | – | – |")
+    if any(p.source == "shipped" for p in points):
+        rows += ["", f"*shipped*: {SOURCE_LABEL}; compute a design to replay its grasps."]
     return "\n".join(rows)
 
 
@@ -100,8 +113,11 @@ class MapPanel:
         store: ResultStore,
         objects: Sequence[str],
         on_pick: Callable[[float, float], None],
+        ref_dir: Path | None = None,
     ) -> None:
         self.store = store
+        self.ref_dir = ref_dir
+        self.tilt = "ulnar"
         self.objects = tuple(objects)
         self.settings = SimSettings()
         self.current = (0.0, 45.0)
@@ -134,6 +150,12 @@ class MapPanel:
         self.settings = settings
         self.refresh()
 
+    def set_tilt(self, tilt: str) -> None:
+        """Show the designs of this CMC tilt ('ulnar' or 'radial')."""
+        if tilt != self.tilt:
+            self.tilt = tilt
+            self.refresh()
+
     def refresh(self) -> None:
         """Re-read the store (a design was completed) and redraw."""
         self._kick(reload=True)
@@ -154,12 +176,11 @@ class MapPanel:
                     self._busy = False
                     return
             if reload:
-                self.points = complete_designs(self.store, self.objects, self.settings)
-                self.table.content = table_markdown(self.points)
-                opts = (
-                    PICK_NONE,
-                    *(f"CMC {p.cmc_deg:g}°, MCP {p.mcp_deg:g}°" for p in self.points),
+                self.points = map_points(
+                    self.store, self.objects, self.settings, self.tilt, self.ref_dir
                 )
+                self.table.content = table_markdown(self.points)
+                opts = (PICK_NONE, *(p.label for p in self.points))
                 if tuple(self.pick.options) != opts:
                     self.pick.options = opts
             self.image.image = render_map(self.points, self.metric.value, self.current)
@@ -168,7 +189,7 @@ class MapPanel:
     def _picked(self) -> None:
         label = self.pick.value
         for p in self.points:
-            if label == f"CMC {p.cmc_deg:g}°, MCP {p.mcp_deg:g}°":
+            if label == p.label:
                 self.pick.value = PICK_NONE
                 self._on_pick(p.cmc_deg, p.mcp_deg)
                 return

@@ -13,10 +13,12 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import viser
 
 from app.design import ThumbDesign
+from app.explorer.reference import REFERENCE_NOTE, reference_score
 from app.objects import load_object
 from app.scores import DesignScore, ObjectScore
 from app.settings import SimSettings
@@ -43,6 +45,8 @@ class ScoreSnapshot:
     """'cached' | 'waiting' | 'computing' | 'complete' | 'cancelled' | 'error: ...'."""
     seconds: float = 0.0
     extra: dict[str, str] = field(default_factory=dict)
+    reference: DesignScore | None = None
+    """The shipped reference sweep's score of this design (None: not a shipped design)."""
 
     def complete(self, key: str) -> bool:
         """All hypotheses of ``key`` are stored."""
@@ -56,13 +60,20 @@ class ScoreSnapshot:
 
 
 def read_snapshot(
-    store: ResultStore, design: ThumbDesign, objects: Sequence[str], settings: SimSettings
+    store: ResultStore,
+    design: ThumbDesign,
+    objects: Sequence[str],
+    settings: SimSettings,
+    ref_dir: Path | None = None,
 ) -> ScoreSnapshot:
-    """The stored counts of a design (one SQL aggregate)."""
+    """The stored counts of a design (one SQL aggregate), and its shipped reference score."""
     summ = store.summary(design_key(design), settings.key())
     counts = {k: summ.get(object_key(k), (0, 0, 0)) for k in objects}
     n_gh = {k: len(cached_hypotheses(k)) for k in objects}
-    return ScoreSnapshot(design, counts, n_gh)
+    ref = reference_score(
+        design.cmc_deg, design.mcp_deg, objects, settings, design.cmc_tilt, ref_dir
+    )
+    return ScoreSnapshot(design, counts, n_gh, reference=ref)
 
 
 def _pct(x: float | None) -> str:
@@ -98,6 +109,26 @@ def snapshot_markdown(s: ScoreSnapshot) -> str:
     ]
     if s.seconds:
         rows.append(f"computed in {s.seconds:.1f} s")
+    if s.reference is not None and not complete:  # the shipped row first: it is complete
+        rows[1:1] = ["", reference_markdown(s.reference), "", "**Your store:**"]
+    return "\n".join(rows)
+
+
+def reference_markdown(ref: DesignScore) -> str:
+    """The shipped reference sweep's row of a design (shown until the store has it)."""
+    rows = [
+        f"**Shipped reference** — {REFERENCE_NOTE}.",
+        "",
+        "| object | FC % | C % | S_GAS % |",
+        "|---|---:|---:|---:|",
+    ]
+    for k, o in ref.objects.items():
+        rows.append(f"| {k} | {_pct(o.fc_pct)} | {_pct(o.c_pct)} | {_pct(o.sgas_pct)} |")
+    rows += [
+        "",
+        f"reference: PP {_pct(ref.pp_sgas_pct)} · CG {_pct(ref.cg_sgas_pct)} · "
+        f"total **{_pct(ref.total_sgas_pct)}**",
+    ]
     return "\n".join(rows)
 
 
@@ -130,8 +161,10 @@ class ScoreWorker:
         on_object_done: Callable[[str], None],
         executor: Executor | None = None,
         debounce_s: float = DEBOUNCE_S,
+        ref_dir: Path | None = None,
     ) -> None:
         self.store = store
+        self.ref_dir = ref_dir
         self.objects = tuple(objects)
         self.on_snapshot = on_snapshot
         self.on_object_done = on_object_done
@@ -150,7 +183,7 @@ class ScoreWorker:
 
     def request(self, design: ThumbDesign, settings: SimSettings) -> None:
         """Show the stored scores of ``design`` now; compute the rest after the debounce."""
-        snap = read_snapshot(self.store, design, self.objects, settings)
+        snap = read_snapshot(self.store, design, self.objects, settings, self.ref_dir)
         missing = any(not snap.complete(k) for k in self.objects)
         snap.state = "waiting" if missing else "complete"
         self.on_snapshot(snap)
@@ -195,7 +228,7 @@ class ScoreWorker:
 
     def _compute(self, design: ThumbDesign, settings: SimSettings, cancel: threading.Event) -> None:
         t0 = time.perf_counter()
-        snap = read_snapshot(self.store, design, self.objects, settings)
+        snap = read_snapshot(self.store, design, self.objects, settings, self.ref_dir)
         snap.state = "computing"
         try:
             for key in self.objects:
@@ -227,7 +260,7 @@ class ScoreWorker:
                 )  # fmt: skip
                 if res is None or cancel.is_set():
                     return
-                fresh = read_snapshot(self.store, design, self.objects, settings)
+                fresh = read_snapshot(self.store, design, self.objects, settings, self.ref_dir)
                 snap.counts[key] = fresh.counts[key]
                 self.on_object_done(key)
             snap.running = None

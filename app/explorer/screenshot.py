@@ -43,7 +43,7 @@ def take_screenshot(
     )
     tab = "map" if view == "map" else ("grasp" if state.gh is not None else None)
     url = srv.url + "/" + UrlState(state.cmc_deg, state.mcp_deg, state.object_key,
-                                   state.gh, tab).query()  # fmt: skip
+                                   state.gh, tab, state.tilt).query()  # fmt: skip
     try:
         w, h = size
         profile_root = Path("build") / "chromium"
@@ -79,7 +79,9 @@ def take_screenshot(
 def screenshot_cli(args: argparse.Namespace) -> int:
     """Entry point of ``handbench screenshot`` (flags parsed in ``app.cli``)."""
     size = parse_size(args.size)
-    state = UrlState(args.cmc, args.mcp, args.object, args.gh)
+    tilt = getattr(args, "cmc_tilt", None)
+    state = UrlState(args.cmc, args.mcp, args.object, args.gh,
+                     tilt=None if tilt in (None, "ulnar") else tilt)  # fmt: skip
     t0 = time.perf_counter()
     try:
         out = take_screenshot(Path(args.out), state, size, args.view, args.store)

@@ -60,6 +60,7 @@ class ExplorerServer:
         workers: int | None = None,
         shots_dir: str | Path | None = None,
         debounce_s: float = 0.3,
+        reference_dir: str | Path | None = None,
     ) -> None:
         objs = tuple(objects) if objects else _objects_from_env()
         for k in objs:
@@ -81,6 +82,7 @@ class ExplorerServer:
             server=self.viser,
             default_object="chips_can" if "chips_can" in objs else objs[0],
             debounce_s=debounce_s,
+            reference_dir=Path(reference_dir) if reference_dir is not None else None,
         )
         self.sessions: dict[int, Session] = {}
         self._lock = threading.Lock()

@@ -59,6 +59,8 @@ class ExplorerContext:
     """The viser server (share URL)."""
     default_object: str = "chips_can"
     debounce_s: float = 0.3
+    reference_dir: Path | None = None
+    """Shipped reference sweep (table.csv + meta.json); None: docs/results."""
 
 
 @dataclass
@@ -102,7 +104,7 @@ class Session:
         self._setup_gui()
         self.worker = ScoreWorker(
             ctx.store, ctx.objects, self.score_panel.show, self._object_scored,
-            executor=ctx.executor, debounce_s=ctx.debounce_s,
+            executor=ctx.executor, debounce_s=ctx.debounce_s, ref_dir=ctx.reference_dir,
         )  # fmt: skip
         self._probe_key = url_state.new_probe_key()
         self._probe = self.client.gui.add_html(url_state.probe_html(self._probe_key))
@@ -144,7 +146,9 @@ class Session:
                 gui, self.on_gh, self.on_play, self.on_mode, self._load_outcomes
             )
         with tabs.add_tab("Map", viser.Icon.MAP):
-            self.map_panel = MapPanel(gui, self.ctx.store, self.ctx.objects, self._map_select)
+            self.map_panel = MapPanel(
+                gui, self.ctx.store, self.ctx.objects, self._map_select, self.ctx.reference_dir
+            )
         with tabs.add_tab("Share", viser.Icon.SHARE):
             self.share_panel = SharePanel(gui, self)
 
@@ -191,7 +195,8 @@ class Session:
             self.replay_panel.select_index(self.gh)
             c = self.design.cmc_deg if s.cmc_deg is None else s.cmc_deg
             m = self.design.mcp_deg if s.mcp_deg is None else s.mcp_deg
-            design = ThumbDesign(c, m)
+            tilt = self.design.cmc_tilt if s.tilt is None else s.tilt
+            design = ThumbDesign(c, m, tilt)  # type: ignore[arg-type]  # checked by parse_query
             self.design_panel.set_design(design.cmc_deg, design.mcp_deg)
             self._apply_design(design)
             self.frame_camera()
@@ -207,7 +212,7 @@ class Session:
     def on_design(self, cmc_deg: float, mcp_deg: float) -> None:
         """Slider handler: coalesce a burst, apply the newest design."""
         with self._req_lock:
-            self._req = ThumbDesign(cmc_deg, mcp_deg)
+            self._req = ThumbDesign(cmc_deg, mcp_deg, self.design.cmc_tilt)
             if self._busy:
                 return
             self._busy = True
@@ -224,7 +229,7 @@ class Session:
         t0 = time.perf_counter()
         self._stop_player()
         self.design = design
-        self.hand = build_hand(design.cmc_deg, design.mcp_deg)
+        self.hand = build_hand(design.cmc_deg, design.mcp_deg, cmc_tilt=design.cmc_tilt)
         self.kit = HandKit(self.hand)
         T, q = self.hand_view.T_object_palm, self.hand_view.q
         with self.client.atomic():
@@ -237,6 +242,7 @@ class Session:
         self.timings.grasp_redraw.append(t2 - t0)
         self.worker.request(design, self.settings)
         self._refresh_outcomes()
+        self.map_panel.set_tilt(design.cmc_tilt)
         self.map_panel.set_current(design.cmc_deg, design.mcp_deg)
         self.share_panel.update_link()
 
@@ -395,8 +401,9 @@ class Session:
 
     def state_query(self) -> str:
         """The link query of the current state."""
+        tilt = None if self.design.cmc_tilt == "ulnar" else self.design.cmc_tilt
         return url_state.UrlState(
-            self.design.cmc_deg, self.design.mcp_deg, self.object_key, str(self.gh)
+            self.design.cmc_deg, self.design.mcp_deg, self.object_key, str(self.gh), tilt=tilt
         ).query()
 
     # ------------------------------------------------------------------ teardown

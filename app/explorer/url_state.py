@@ -1,4 +1,5 @@
-"""Links that open a state: ``http://host:port/?cmc=30&mcp=75&object=chips_can&gh=17``.
+"""Links that open a state: ``http://host:port/?cmc=30&mcp=75&object=chips_can&gh=17``
+(``&tilt=radial`` for the radial CMC tilt; ulnar, the default, is left out).
 
 viser does not tell the server a page's URL (the websocket URL drops the query). So each new
 tab gets a hidden HTML element whose image ``onerror`` handler copies ``location.search``
@@ -14,6 +15,9 @@ from dataclasses import dataclass
 from urllib.parse import parse_qs, urlencode
 
 from app.errors import HandbenchError
+
+TILTS: tuple[str, ...] = ("ulnar", "radial")
+"""Valid values of the ``tilt`` link parameter (``ThumbDesign.cmc_tilt``)."""
 
 LOCAL_STORAGE_PREFIX = "viser-user:"
 """The prefix viser's client puts before keys written through ``client.local_storage``."""
@@ -34,6 +38,8 @@ class UrlState:
     """Hypothesis index ('17') or id ('chips_can/r07/d00/t03')."""
     tab: str | None = None
     """Panel tab to open first: 'design', 'grasp', 'map' (for screenshots)."""
+    tilt: str | None = None
+    """CMC tilt: 'ulnar' or 'radial' (None: keep the current one)."""
 
     def query(self) -> str:
         """'?cmc=30&mcp=75&object=chips_can&gh=17' (unset fields left out)."""
@@ -43,6 +49,7 @@ class UrlState:
             "object": self.object_key,
             "gh": self.gh,
             "tab": self.tab,
+            "tilt": self.tilt,
         }
         return "?" + urlencode({k: v for k, v in d.items() if v is not None}, safe="/")
 
@@ -59,7 +66,10 @@ def parse_query(search: str) -> UrlState:
         except ValueError:
             raise UrlStateError(f"link parameter {name}={q[name]!r} is not a number") from None
 
-    return UrlState(num("cmc"), num("mcp"), q.get("object"), q.get("gh"), q.get("tab"))
+    tilt = q.get("tilt")
+    if tilt is not None and tilt not in TILTS:
+        raise UrlStateError(f"link parameter tilt={tilt!r} must be one of {TILTS}")
+    return UrlState(num("cmc"), num("mcp"), q.get("object"), q.get("gh"), q.get("tab"), tilt)
 
 
 def new_probe_key() -> str:
