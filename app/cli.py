@@ -110,6 +110,13 @@ def parse_angle_list(text: str, name: str) -> list[float]:
     return vals
 
 
+def _designs_arg(args: argparse.Namespace) -> list[ThumbDesign]:
+    """Designs of --cmc × --mcp (default: the 28 published ones), CMC-major."""
+    cmcs = parse_angle_list(args.cmc, "cmc") if args.cmc else list(CMC_GRID_DEG)
+    mcps = parse_angle_list(args.mcp, "mcp") if args.mcp else list(MCP_GRID_DEG)
+    return [ThumbDesign(c, m) for c in cmcs for m in mcps]
+
+
 def _objects_arg(names: list[str] | None) -> list[str]:
     from app.objects import OBJECT_KEYS, load_object
 
@@ -203,15 +210,12 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from app.design import ThumbDesign as D
     from app.objects import load_object
     from app.plots import plot_bars, plot_contour, plot_lines
     from app.report import write_table_csv, write_table_md
     from app.sweep import cached_hypotheses, make_executor, run_sweep
 
-    cmcs = parse_angle_list(args.cmc, "cmc") if args.cmc else list(CMC_GRID_DEG)
-    mcps = parse_angle_list(args.mcp, "mcp") if args.mcp else list(MCP_GRID_DEG)
-    designs = [D(c, m) for c in cmcs for m in mcps]
+    designs = _designs_arg(args)
     names = _objects_arg(args.object)
     settings = settings_from_args(args)
     out = Path(args.out)
@@ -257,14 +261,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_bruteforce(args: argparse.Namespace) -> int:
-    from app.design import ThumbDesign as D
     from app.gqm import GQMSettings
     from app.gqm.compare import run_comparison
     from app.sweep import make_executor
 
-    cmcs = parse_angle_list(args.cmc, "cmc") if args.cmc else list(CMC_GRID_DEG)
-    mcps = parse_angle_list(args.mcp, "mcp") if args.mcp else list(MCP_GRID_DEG)
-    designs = [D(c, m) for c in cmcs for m in mcps]
+    designs = _designs_arg(args)
     names = _objects_arg(args.object)
     settings = settings_from_args(args)
     if args.max_grasps < 1:

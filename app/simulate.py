@@ -43,6 +43,25 @@ class HandKit:
         self.approach_idx = list(range(len(self.names)))
         self.T_palm_approach = np.stack([T_open[i] @ self.T_link_fcl[i] for i in self.approach_idx])
 
+    def contacts(
+        self, obj: object, T_links: np.ndarray, idx: list[int], settings: SimSettings
+    ) -> tuple[ContactSet, int]:
+        """Contacts of links ``idx`` posed at ``T_links`` (16, 4, 4) in the object frame, and
+        the FCL queries spent."""
+        counter = [0]
+        cs = contacts_of_links(
+            obj,
+            [self.names[j] for j in idx],
+            [self.shapes[j] for j in idx],
+            [self.moving[j] for j in idx],
+            T_links[idx],
+            self.T_link_fcl[idx],
+            settings.contact,
+            settings.grasp_type.palmar_angle_deg,
+            counter,
+        )
+        return cs, counter[0]
+
     def bodies(self, finger: str) -> list[fcl.CollisionObject]:
         """The moving FCL bodies of a finger's three links."""
         return [self.moving[i] for i in self.chains[finger].link_indices]
@@ -140,19 +159,8 @@ def simulate_base(
         q[list(ch.joints)] = close_finger(ch, kit.bodies(finger), T, obstacles, closing, stats)
     T_links = T @ kit.hand.link_poses(q)
     idx = [j for j, n in enumerate(kit.names) if not n.startswith("thumb")]
-    counter = [0]
-    cs = contacts_of_links(
-        obj,
-        [kit.names[j] for j in idx],
-        [kit.shapes[j] for j in idx],
-        [kit.moving[j] for j in idx],
-        T_links[idx],
-        kit.T_link_fcl[idx],
-        settings.contact,
-        settings.grasp_type.palmar_angle_deg,
-        counter,
-    )
-    return BaseGrasp(True, T, q, cs, stats.queries + counter[0])
+    cs, n_q = kit.contacts(obj, T_links, idx, settings)
+    return BaseGrasp(True, T, q, cs, stats.queries + n_q)
 
 
 def simulate_thumb(
@@ -188,24 +196,13 @@ def simulate_thumb(
     q[list(thumb.joints)] = close_finger(thumb, kit.bodies("thumb"), T, obstacles, closing, stats)
     T_links = T @ kit.hand.link_poses(q)
     idx = list(thumb.link_indices)
-    counter = [0]
-    cs = contacts_of_links(
-        obj,
-        [kit.names[j] for j in idx],
-        [kit.shapes[j] for j in idx],
-        [kit.moving[j] for j in idx],
-        T_links[idx],
-        kit.T_link_fcl[idx],
-        settings.contact,
-        settings.grasp_type.palmar_angle_deg,
-        counter,
-    )
+    cs, n_q = kit.contacts(obj, T_links, idx, settings)
     return Grasp(
         T,
         q,
         merge(base.contacts, cs),
         T_links[idx[2]][:3, 1].copy(),
         True,
-        stats.queries + counter[0],
+        stats.queries + n_q,
         tuple(stats.events),
     )
