@@ -4,11 +4,13 @@ the typed dataclasses (``ThumbDesign``, ``SimSettings``) and their field docstri
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import json
 import math
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, get_args, get_origin, get_type_hints
 
@@ -117,6 +119,18 @@ def _designs_arg(args: argparse.Namespace) -> list[ThumbDesign]:
     return [ThumbDesign(c, m) for c in cmcs for m in mcps]
 
 
+@contextlib.contextmanager
+def _executor(args: argparse.Namespace) -> Iterator[Any]:
+    """The executor of --executor/--workers/--address, closed on exit."""
+    from app.sweep import make_executor
+
+    ex = make_executor(args.executor, args.workers, args.address)
+    try:
+        yield ex
+    finally:
+        ex.close()
+
+
 def _objects_arg(names: list[str] | None) -> list[str]:
     from app.objects import OBJECT_KEYS, load_object
 
@@ -171,14 +185,13 @@ def cmd_render(args: argparse.Namespace) -> int:
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from app.sweep import make_executor, run_sweep
+    from app.sweep import run_sweep
 
     design = ThumbDesign(args.cmc, args.mcp, args.cmc_tilt)
     names = _objects_arg(args.object)
     settings = settings_from_args(args)
     with _store(args) as store:
-        ex = make_executor(args.executor, args.workers, args.address)
-        try:
+        with _executor(args) as ex:
             res = run_sweep(
                 [design],
                 names,
@@ -188,8 +201,6 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                 progress=not args.json and sys.stderr.isatty(),
                 gh_stride=args.gh_stride,
             )
-        finally:
-            ex.close()
     assert res is not None
     score = res.scores[0]
     doc = score.to_json_dict(design.cmc_deg, design.mcp_deg, settings.as_dict())
@@ -213,7 +224,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from app.objects import load_object
     from app.plots import plot_bars, plot_contour, plot_lines
     from app.report import write_table_csv, write_table_md
-    from app.sweep import cached_hypotheses, make_executor, run_sweep
+    from app.sweep import cached_hypotheses, run_sweep
 
     designs = _designs_arg(args)
     names = _objects_arg(args.object)
@@ -222,8 +233,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     with _store(args) as store:
-        ex = make_executor(args.executor, args.workers, args.address)
-        try:
+        with _executor(args) as ex:
             res = run_sweep(
                 designs,
                 names,
@@ -233,8 +243,6 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                 chunk=args.chunk,
                 gh_stride=args.gh_stride,
             )
-        finally:
-            ex.close()
     assert res is not None
     rows = [s.to_row(d.cmc_deg, d.mcp_deg) for d, s in zip(res.designs, res.scores, strict=True)]
     names_disp = {k: load_object(k).spec.name for k in names}
@@ -263,7 +271,6 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 def cmd_bruteforce(args: argparse.Namespace) -> int:
     from app.gqm import GQMSettings
     from app.gqm.compare import run_comparison
-    from app.sweep import make_executor
 
     designs = _designs_arg(args)
     names = _objects_arg(args.object)
@@ -277,8 +284,7 @@ def cmd_bruteforce(args: argparse.Namespace) -> int:
     out = Path(args.out)
     t0 = time.perf_counter()
     with _store(args) as store:
-        ex = make_executor(args.executor, args.workers, args.address)
-        try:
+        with _executor(args) as ex:
             res = run_comparison(
                 designs,
                 names,
@@ -294,8 +300,6 @@ def cmd_bruteforce(args: argparse.Namespace) -> int:
                 progress=sys.stderr.isatty(),
                 picture=not args.no_picture,
             )
-        finally:
-            ex.close()
     print(
         f"{len(designs)} designs x {len(names)} objects, brute-force GHs per object: "
         + ", ".join(f"{k} {v}" for k, v in res.n_gh.items())

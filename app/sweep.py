@@ -305,6 +305,49 @@ def plan_tasks(
     return tasks
 
 
+def execute_tasks(
+    tasks: Sequence[Task],
+    store: ResultStore,
+    settings_key: str,
+    object_key_of: Callable[[str], str],
+    executor: Executor | None = None,
+    progress: bool | Callable[[int, int], None] = True,
+    cancel: threading.Event | None = None,
+    label: str = "grasps",
+) -> int:
+    """Run ``tasks`` and store each one's outcomes in one transaction; returns how many.
+
+    ``object_key_of(name)`` gives the store key of an object (the hypothesis set's key).
+    ``progress`` is True (terminal bar), False, or a callback ``(done, total)``. An executor
+    made here is closed here.
+    """
+    total = sum(len(t.gh) * len(t.designs) for t in tasks)
+    bar = Progress(total, label) if progress is True and total else None
+    own = executor is None
+    executor = executor or LocalExecutor()
+    done = 0
+    try:
+        for task, results in executor.run(tasks, cancel):
+            okey = object_key_of(task.object_name)
+            by_design: dict[int, dict[str, GraspOutcome]] = {}
+            for di, gh_id, outcome in results:
+                by_design.setdefault(di, {})[gh_id] = outcome
+            with store.transaction():
+                for di, outs in by_design.items():
+                    store.put_many(design_key(task.designs[di]), okey, settings_key, outs)
+            done += len(results)
+            if bar:
+                bar.update(len(results))
+            elif callable(progress):
+                progress(done, total)
+    finally:
+        if bar:
+            bar.close()
+        if own:
+            executor.close()
+    return done
+
+
 def run_sweep(
     designs: Sequence[ThumbDesign],
     object_names: Sequence[str] = OBJECT_KEYS,
@@ -336,30 +379,7 @@ def run_sweep(
     for name in object_names:
         store.put_object_meta(object_key(name), {"key": name})
     tasks = plan_tasks(store, designs, object_names, settings, chunk, gh_stride)
-    total = sum(len(t.gh) * len(t.designs) for t in tasks)
-    bar = Progress(total) if progress is True and total else None
-    own = executor is None
-    executor = executor or LocalExecutor()
-    done = 0
-    try:
-        for task, results in executor.run(tasks, cancel):
-            okey = object_key(task.object_name)
-            by_design: dict[int, dict[str, GraspOutcome]] = {}
-            for di, gh_id, outcome in results:
-                by_design.setdefault(di, {})[gh_id] = outcome
-            with store.transaction():
-                for di, outs in by_design.items():
-                    store.put_many(design_key(task.designs[di]), okey, skey, outs)
-            done += len(results)
-            if bar:
-                bar.update(len(results))
-            elif callable(progress):
-                progress(done, total)
-    finally:
-        if bar:
-            bar.close()
-        if own:
-            executor.close()
+    done = execute_tasks(tasks, store, skey, object_key, executor, progress, cancel)
     if cancel is not None and cancel.is_set():
         return None
     scores = [score_design(store, d, object_names, settings, gh_stride) for d in designs]

@@ -38,11 +38,11 @@ from app.settings import SimSettings
 from app.store import GraspOutcome, ResultStore
 from app.sweep import (
     Executor,
-    LocalExecutor,
     Progress,
     Task,
     _kit,
     design_key,
+    execute_tasks,
     hypotheses_of,
     set_object_key,
 )
@@ -96,29 +96,15 @@ def simulate_bf(
         meta = {"key": name, "hypothesis_set": hypothesis_set}
         store.put_object_meta(set_object_key(name, hypothesis_set), meta)
     tasks = plan_bf_tasks(store, designs, object_names, settings, hypothesis_set=hypothesis_set)
-    total = sum(len(t.gh) * len(t.designs) for t in tasks)
-    bar = Progress(total, "brute-force grasps") if progress and total else None
-    own = executor is None
-    executor = executor or LocalExecutor()
-    done = 0
-    try:
-        for task, results in executor.run(tasks, None):
-            okey = set_object_key(task.object_name, hypothesis_set)
-            by_design: dict[int, dict[str, GraspOutcome]] = {}
-            for di, gh_id, outcome in results:
-                by_design.setdefault(di, {})[gh_id] = outcome
-            with store.transaction():
-                for di, outs in by_design.items():
-                    store.put_many(design_key(task.designs[di]), okey, skey, outs)
-            done += len(results)
-            if bar:
-                bar.update(len(results))
-    finally:
-        if bar:
-            bar.close()
-        if own:
-            executor.close()
-    return done
+    return execute_tasks(
+        tasks,
+        store,
+        skey,
+        lambda name: set_object_key(name, hypothesis_set),
+        executor,
+        progress,
+        label="brute-force grasps",
+    )
 
 
 # ----------------------------------------------------------------------------- GQMs
