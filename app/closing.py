@@ -9,8 +9,9 @@ from FCL; a pair whose lower bound (last exact distance minus the motion since) 
 ``EXACT_BELOW_MM`` is not queried again. The stage ends when a moving link is within the
 stop tolerance of the object (contact), of another finger or the palm (self-collision,
 which stops the joint but is no object contact), or an active joint reaches its limit.
-The last step is refined by bisection to the first crossing of gap = stop tolerance, so
-the stop is a property of the geometry and the tolerance, not of any step size.
+The last step is refined by false position (Illinois) to the first crossing of gap = stop
+tolerance, ending once the gap lies within ``REFINE_BAND`` · tol below tol, so the stop is a
+property of the geometry and the tolerance, not of any step size.
 """
 
 from __future__ import annotations
@@ -25,9 +26,12 @@ from app.hand.chains import FingerChain
 
 #: Pairs whose distance lower bound is below this are queried exactly each step (mm).
 EXACT_BELOW_MM = 12.0
-#: Bisection steps refining a stage's stop to the first crossing of gap = stop tolerance.
-BISECT_ITERS = 5
+#: Cap on false-position probes refining a stage's stop to the first crossing of gap = tol.
+REFINE_ITERS = 8
+#: The refinement ends once the stop's gap is within this fraction of tol below tol.
+REFINE_BAND = 0.002
 
+_LOWER = np.tri(3, dtype=bool)
 _REQ = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
 
 
@@ -113,7 +117,7 @@ def _axis_rates(T_links: np.ndarray, chain: FingerChain, v: np.ndarray) -> np.nd
     along = np.einsum("kiej,ij->kie", rel, a)
     perp2 = (rel * rel).sum(-1) - along * along
     rho = np.sqrt(np.maximum(perp2, 0.0)).max(-1) + chain.radii[:, None]  # (k, i)
-    rho = np.where(np.tri(3, dtype=bool), rho, 0.0)  # axis i moves link k only if i <= k
+    rho = np.where(_LOWER, rho, 0.0)  # axis i moves link k only if i <= k
     return rho @ np.abs(v)
 
 
@@ -130,87 +134,111 @@ def advance_stage(
     """Close the finger's joints along rates ``v`` (3,) from ``q`` (3,) until an event.
 
     ``bodies`` are the finger's three FCL capsules (moved here). Returns the new q (3,).
+    The bookkeeping runs on small Python lists: a stage touches a handful of pairs per
+    step, and numpy's per-call overhead on such arrays cost more than the FCL queries.
     """
     q = q.astype(float).copy()
     tol = settings.stop_tol_mm
     first = int(np.flatnonzero(v > 0)[0])
-    moving = range(first, 3)
-    n_obs = len(obstacles.objs)
+    moving = list(range(first, 3))
+    objs = obstacles.objs
+    n_obs = len(objs)
     mask = obstacles.mask if obstacles.mask is not None else np.ones((3, n_obs), bool)
-    is_obj = obstacles.is_object
-    lb = np.full((3, n_obs), -np.inf)  # -inf: query exactly
+    is_obj = obstacles.is_object.tolist()
+    lb_arr = np.full((3, n_obs), -np.inf)  # -inf: query exactly
     if obstacles.spheres is not None:
         T0 = T_object_palm @ chain.link_poses(q)
         c_link = np.einsum("kij,kj->ki", T0[:, :3, :3], chain.mid_link) + T0[:, :3, 3]
         sph = obstacles.spheres
         finite = np.isfinite(sph[:, 3])
         gap = np.linalg.norm(c_link[:, None, :] - sph[None, finite, :3], axis=-1)
-        lb[:, finite] = gap - chain.reach[:, None] - sph[None, finite, 3]
-    lb[~mask] = np.inf
+        lb_arr[:, finite] = gap - chain.reach[:, None] - sph[None, finite, 3]
+    lb_arr[~mask] = np.inf
+    # per moving link: pair bounds (list) and which of them are exact at the current probe
+    lb: dict[int, list[float]] = {k: lb_arr[k].tolist() for k in moving}
+    T_fcl = chain.T_link_fcl
+    inf = float("inf")
 
-    def evaluate(qq: np.ndarray, full: bool) -> tuple[list[int], list[int]]:
-        """Exact gaps at ``qq`` by lazy evaluation; links within tol (object, self).
+    def evaluate(qq: np.ndarray) -> tuple[list[int], list[int], float]:
+        """Exact gaps at ``qq`` by lazy evaluation: (links within tol of the object, links
+        within tol of the hand, smallest gap of a moving link).
 
         For each moving link, the pair with the smallest lower bound is queried until the
         smallest bound is an exact distance: that is the link's gap, and every other pair is
-        at least its bound. Pairs with a bound <= tol are all queried (they may touch).
-        ``full=False`` keeps the bounds of the previous configuration (bisection probes,
-        which stay between two configurations already bounded)."""
+        at least its bound. Pairs with a bound <= tol are all queried (they may touch)."""
         T_links = T_object_palm @ chain.link_poses(qq)
-        exact = np.zeros_like(lb, dtype=bool)
         obj_hit: list[int] = []
         self_hit: list[int] = []
+        g_min = inf
         for k in moving:
-            posed = False
             row = lb[k]
+            exact = [False] * n_obs
+            posed = False
             while True:
-                p = int(np.argmin(row))
-                if not np.isfinite(row[p]) and row[p] > 0:
+                m = min(row)
+                if m == inf:
                     break  # no pair to check
-                if exact[k, p]:
-                    cand = np.flatnonzero((row <= tol) & ~exact[k])
-                    if len(cand) == 0:
+                p = row.index(m)
+                if exact[p]:
+                    p = next((j for j in range(n_obs) if row[j] <= tol and not exact[j]), -1)
+                    if p < 0:
                         break
-                    p = int(cand[0])
                 if not posed:
-                    bodies[k].setTransform(fcl_transform(T_links[k] @ chain.T_link_fcl[k]))
+                    bodies[k].setTransform(fcl_transform(T_links[k] @ T_fcl[k]))
                     posed = True
-                d = pair_distance(bodies[k], obstacles.objs[p])
+                row[p] = float(fcl.distance(bodies[k], objs[p], _REQ, fcl.DistanceResult()))
                 stats.queries += 1
-                row[p] = d
-                exact[k, p] = True
-            hit = np.flatnonzero(exact[k] & (row <= tol))
-            if len(hit):
-                if is_obj[hit].any():
+                exact[p] = True
+            g = min(row)
+            g_min = min(g_min, g)
+            if g <= tol:
+                hits = [j for j in range(n_obs) if exact[j] and row[j] <= tol]
+                if any(is_obj[j] for j in hits):
                     obj_hit.append(k)
                 else:
                     self_hit.append(k)
-        del full
-        return obj_hit, self_hit
+        return obj_hit, self_hit, g_min
 
-    q_safe: np.ndarray | None = None  # last q where every gap exceeded tol
-    lb_safe = lb.copy()
-    rates_safe = np.zeros(3)
+    def set_bounds(base: dict[int, list[float]], rates: np.ndarray, t: float) -> None:
+        for k in moving:
+            d = float(rates[k]) * t
+            lb[k] = [x - d for x in base[k]]
+
+    safe: tuple[np.ndarray, float, dict[int, list[float]], np.ndarray, float] | None = None
+    single = int((v > 0).sum()) == 1
+    rates_fixed: np.ndarray | None = None
     for _ in range(settings.max_steps):
         stats.steps += 1
-        touching_obj, touching_self = evaluate(q, True)
-        if (touching_obj or touching_self) and q_safe is not None:
-            # refine the stop to the first crossing of gap = tol between q_safe and q
-            lo, hi = q_safe, q
-            lb_hi = lb.copy()
-            for _ in range(BISECT_ITERS):
-                mid = 0.5 * (lo + hi)
-                # bounds at mid: from the safe side, minus the motion from q_safe to mid
-                frac = float(np.max((mid - q_safe) / np.where(v > 0, v, 1.0)))
-                lb[:] = lb_safe - rates_safe[:, None] * frac
-                o, s_ = evaluate(mid, False)
+        touching_obj, touching_self, g = evaluate(q)
+        if (touching_obj or touching_self) and safe is not None:
+            # refine the stop to the first crossing of gap = tol between the last safe
+            # configuration (gap g0 > tol) and q (gap <= tol): false position (Illinois),
+            # ending when the gap is within REFINE_BAND of tol from below
+            q0, g0, lb0, rates0, step = safe
+            lo_t, lo_f, hi_t, hi_f = 0.0, g0 - tol, step, g - tol
+            lb_hi = {k: list(r) for k, r in lb.items()}
+            side = 0
+            for _ in range(REFINE_ITERS):
+                if hi_f >= -REFINE_BAND * tol:
+                    break
+                t = hi_t - hi_f * (hi_t - lo_t) / (hi_f - lo_f)
+                t = min(max(t, lo_t + 1e-3 * (hi_t - lo_t)), hi_t - 1e-3 * (hi_t - lo_t))
+                set_bounds(lb0, rates0, t)
+                o, s_, gm = evaluate(q0 + v * t)
                 if o or s_:
-                    hi, touching_obj, touching_self = mid, o, s_
-                    lb_hi = lb.copy()
+                    hi_t, hi_f = t, gm - tol
+                    touching_obj, touching_self = o, s_
+                    lb_hi = {k: list(r) for k, r in lb.items()}
+                    if side == -1:
+                        lo_f *= 0.5
+                    side = -1
                 else:
-                    lo = mid
-            q = hi
-            lb[:] = lb_hi
+                    lo_t, lo_f = t, gm - tol
+                    if side == 1:
+                        hi_f *= 0.5
+                    side = 1
+            q = np.minimum(q0 + v * hi_t, np.where(v > 0, chain.q_upper, q0))
+            lb.update(lb_hi)
         if touching_obj:
             return q, StageEvent("contact", tuple(sorted(set(touching_obj))))
         if touching_self:
@@ -219,15 +247,19 @@ def advance_stage(
         at_limit = tuple(int(i) for i in np.flatnonzero((v > 0) & (room <= 1e-12)))
         if at_limit:
             return q, StageEvent("limit", joints=at_limit)
-        T_links = T_object_palm @ chain.link_poses(q)
-        rates = _axis_rates(T_links, chain, v)
-        gaps = lb[list(moving)].min(axis=1)
+        if rates_fixed is None:
+            rates = _axis_rates(T_object_palm @ chain.link_poses(q), chain, v)
+            if single:  # one active joint: the links it moves are rigid relative to its axis
+                rates_fixed = rates
+        else:
+            rates = rates_fixed
+        gaps = np.array([min(lb[k]) for k in moving])
         with np.errstate(divide="ignore"):
             steps = (gaps - 0.5 * tol) / rates[first:]
         step = min(float(steps.min()), float(room.min()))
-        q_safe, lb_safe, rates_safe = q, lb.copy(), rates
+        safe = (q, g, {k: list(r) for k, r in lb.items()}, rates, step)
         q = np.minimum(q + v * step, np.where(v > 0, chain.q_upper, q))
-        lb -= rates[:, None] * step
+        set_bounds(safe[2], rates, step)
     stats.capped += 1
     return q, StageEvent("max_steps")
 
@@ -239,15 +271,28 @@ def close_finger(
     obstacles: Obstacles,
     settings: ClosingSettings,
     stats: ClosingStats,
+    first_stage: dict[str, tuple[np.ndarray, StageEvent]] | None = None,
 ) -> np.ndarray:
-    """Close one finger from its open posture by ``settings.mode``; returns its q (3,)."""
+    """Close one finger from its open posture by ``settings.mode``; returns its q (3,).
+
+    ``first_stage``: a memo of the sequential mode's first stage (the proximal joint alone),
+    keyed by finger, for callers whose first stage is the same across calls (the thumb's CMC
+    stage across MCP design angles: ``app.simulate``). Other modes ignore it.
+    """
     q = chain.q_lower.copy()
     mode = settings.mode
 
     def run(v: np.ndarray) -> StageEvent:
         nonlocal q
         q0 = q
-        q, ev = advance_stage(chain, bodies, T_object_palm, q, v, obstacles, settings, stats)
+        memo = first_stage is not None and mode == "sequential" and v[0] > 0
+        if memo and chain.finger in first_stage:  # type: ignore[operator]
+            q, ev = first_stage[chain.finger]  # type: ignore[index]
+            q = q.copy()
+        else:
+            q, ev = advance_stage(chain, bodies, T_object_palm, q, v, obstacles, settings, stats)
+            if memo:
+                first_stage[chain.finger] = (q.copy(), ev)  # type: ignore[index]
         stats.events.append(f"{chain.finger}:{np.flatnonzero(v > 0).tolist()}:{ev.kind}")
         if stats.stages is not None:
             stats.stages.append((chain.finger, q0.copy(), q.copy(), ev.kind))

@@ -15,7 +15,7 @@ from app.grasp_type import GraspTypeSettings
 
 #: Bumped whenever a code change alters simulated outcomes: part of the settings key, so a
 #: store never serves results of an older engine as current.
-ENGINE_VERSION = 3
+ENGINE_VERSION = 4  # 4: stage stop refined by false position (gap within 0.001 mm of tol)
 
 
 @dataclass(frozen=True)

@@ -11,12 +11,19 @@ final posture.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import fcl
 import numpy as np
 
-from app.closing import ClosingStats, Obstacles, approach, close_finger, fcl_transform
+from app.closing import (
+    ClosingStats,
+    Obstacles,
+    StageEvent,
+    approach,
+    close_finger,
+    fcl_transform,
+)
 from app.contact_set import LONG_FINGERS, ContactSet
 from app.contacts import _reach, contacts_of_links, merge
 from app.hand.chains import FingerChain, finger_chains
@@ -81,6 +88,10 @@ class BaseGrasp:
     """Contacts of the palm and the long fingers."""
     queries: int
     """FCL distance queries spent."""
+    thumb_first_stage: dict[str, tuple[np.ndarray, StageEvent]] = field(default_factory=dict)
+    """Memo of the thumb's CMC stage (sequential mode): with MCP and IP open, the thumb's
+    capsules lie on the metacarpal's line whatever the MCP design angle, so every design
+    sharing this base (same CMC angle) closes CMC identically (docs/cost-model.md)."""
 
 
 @dataclass(frozen=True)
@@ -193,7 +204,9 @@ def simulate_thumb(
         spheres[len(pieces) + n, :3] = (T_links[j] @ kit.T_link_fcl[j])[:3, 3]
         spheres[len(pieces) + n, 3] = kit.reach[j]
     obstacles = Obstacles(objs, len(pieces), mask, spheres)
-    q[list(thumb.joints)] = close_finger(thumb, kit.bodies("thumb"), T, obstacles, closing, stats)
+    q[list(thumb.joints)] = close_finger(
+        thumb, kit.bodies("thumb"), T, obstacles, closing, stats, base.thumb_first_stage
+    )
     T_links = T @ kit.hand.link_poses(q)
     idx = list(thumb.link_indices)
     cs, n_q = kit.contacts(obj, T_links, idx, settings)

@@ -230,3 +230,21 @@ def test_settings_validation_lists_choices() -> None:
         ClosingSettings(mode="wiggle")  # type: ignore[arg-type]
     with pytest.raises(SettingsError, match="stop_tol_mm"):
         ClosingSettings(stop_tol_mm=0)
+
+
+@pytest.mark.parametrize("cmc", [0.0, 30.0])
+def test_thumb_cmc_stage_shared_across_mcp_designs_changes_nothing(cmc: float) -> None:
+    """With MCP and IP open the thumb's capsules lie on the metacarpal's line, so the CMC
+    stage is the same for every MCP design angle: a base shared by designs (its memo of the
+    CMC stage reused) gives the grasps each design gets on a fresh base."""
+    obj, hyps = AnalyticCylinder(), can_hypotheses()
+    s = SimSettings()
+    kits = [HandKit(build_hand(cmc, m)) for m in (0.0, 45.0, 90.0)]
+    for i in (0, 140, 305):
+        shared = simulate_base(kits[0], obj, hyps, i, s)
+        for kit in kits:
+            fresh = simulate_thumb(kit, obj, simulate_base(kit, obj, hyps, i, s), s)
+            reused = simulate_thumb(kit, obj, shared, s)
+            assert np.allclose(fresh.q, reused.q, atol=1e-9), (cmc, i)
+            assert fresh.events == reused.events
+        assert "thumb" in shared.thumb_first_stage  # the memo was used

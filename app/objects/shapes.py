@@ -426,10 +426,27 @@ def union(parts: list[Geometry]) -> Geometry:
         return parts[0]
     mesh = trimesh.boolean.union([g.mesh for g in parts], engine="manifold")
     fns = [g.sdf for g in parts]
+    # bounding sphere of each part: |p - c| - r <= sdf_part(p) everywhere (inside too), so a
+    # part whose bound is not below the best value so far cannot lower the min: skip it
+    centres = np.stack([g.mesh.bounds.mean(axis=0) for g in parts])
+    radii = 1.0 + np.array(  # + 1 mm: curved surfaces bulge past their mesh vertices
+        [
+            np.linalg.norm(g.mesh.vertices - c, axis=1).max()
+            for g, c in zip(parts, centres, strict=True)
+        ]
+    )
 
     def sdf(p: np.ndarray) -> np.ndarray:
         p = _as_points(p)
-        return np.min(np.stack([f(p) for f in fns]), axis=0)
+        lb = np.linalg.norm(p[None, :, :] - centres[:, None, :], axis=2) - radii[:, None]
+        best = np.full(len(p), np.inf)
+        for j in np.argsort(lb.mean(axis=1)):
+            need = lb[j] < best
+            if need.all():
+                best = np.minimum(best, fns[j](p))
+            elif need.any():
+                best[need] = np.minimum(best[need], fns[j](p[need]))
+        return best
 
     return Geometry(mesh, sdf, tuple(pc for g in parts for pc in g.pieces))
 
