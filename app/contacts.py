@@ -50,6 +50,54 @@ def _samples(shape: Shape, spacing: float) -> tuple[np.ndarray, np.ndarray]:
     return shape.surface_points(spacing)
 
 
+#: Cell size of the coarse samples that screen a link's surface samples (mm).
+COARSE_CELL_MM = 4.0
+#: Lipschitz constant assumed of object SDFs (exact ones: 1; bilinear tables: <= sqrt 2).
+SDF_LIPSCHITZ = 1.5
+
+
+@lru_cache(maxsize=512)
+def _coarse(shape: Shape, spacing: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """Coarse screening of a shape's surface samples: (indices (C,) of coarse samples, the
+    coarse sample (K,) each sample is assigned to (its nearest), largest assignment distance).
+    """
+    from scipy.spatial import cKDTree
+
+    p, _ = _samples(shape, spacing)
+    cell = np.floor(p / COARSE_CELL_MM).astype(np.int64)
+    _, first = np.unique(cell, axis=0, return_index=True)
+    idx = np.sort(first)
+    dist, assign = cKDTree(p[idx]).query(p)
+    return idx, np.asarray(assign), float(np.max(dist))
+
+
+def near_surface(
+    obj: object,
+    shape: Shape,
+    p_object: np.ndarray,
+    candidates: np.ndarray,
+    tol: float,
+    spacing: float,
+) -> np.ndarray:
+    """Indices of the shape's samples ``p_object`` (K, 3) among ``candidates`` (K,) bool whose
+    signed distance to the object is <= ``tol``, in sample order.
+
+    Exact screening: the SDF is evaluated on coarse samples first; a sample whose coarse
+    sample c lies farther than ``tol + L·δ`` (δ the largest sample-to-coarse distance, L the
+    SDF's Lipschitz bound) cannot be within ``tol``, so only the others are evaluated."""
+    idx_c, assign, delta = _coarse(shape, spacing)
+    use_c = np.zeros(len(idx_c), dtype=bool)
+    use_c[np.unique(assign[candidates])] = True
+    sd_c = np.full(len(idx_c), np.inf)
+    sd_c[use_c] = obj.sdf(p_object[idx_c[use_c]])  # type: ignore[attr-defined]
+    screen = candidates & (sd_c <= tol + SDF_LIPSCHITZ * delta)[assign]
+    idx = np.flatnonzero(screen)
+    if len(idx) == 0:
+        return idx
+    sd = obj.sdf(p_object[idx])  # type: ignore[attr-defined]
+    return idx[sd <= tol]
+
+
 def farthest_points(p: np.ndarray, m: int) -> np.ndarray:
     """Indices of up to ``m`` points of ``p`` (K, 3) spread by farthest-point sampling."""
     if len(p) <= m:
@@ -76,9 +124,7 @@ def link_patch(
     R, t = T_object_link[:3, :3], T_object_link[:3, 3]
     p = p_link @ R.T + t
     near = ((p - nearest_on_link) ** 2).sum(1) < (30.0**2)  # cheap pre-filter
-    p = p[near]
-    sd = obj.sdf(p) if len(p) else np.zeros(0)  # type: ignore[attr-defined]
-    p = p[sd <= settings.contact_tol_mm]
+    p = p[near_surface(obj, shape, p, near, settings.contact_tol_mm, settings.sample_spacing_mm)]
     if len(p) == 0:  # sampling missed a grazing contact: keep FCL's nearest point
         p = nearest_on_link[None, :]
     p = p[farthest_points(p, settings.max_points_per_link)]
