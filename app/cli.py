@@ -12,6 +12,11 @@ import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from app.design import ThumbDesign
+    from app.settings import SimSettings
 from typing import Any, get_args, get_origin, get_type_hints
 
 from app.config_docs import field_docs
@@ -220,6 +225,38 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _write_sweep_meta(
+    path: Path,
+    settings: SimSettings,
+    designs: list[ThumbDesign],
+    names: list[str],
+    n_gh: dict[str, int],
+    args: argparse.Namespace,
+    elapsed_s: float,
+    res: object,
+) -> None:
+    """meta.json beside a sweep's table: what made it (the explorer's reference layer uses a
+    shipped table only when its settings key, hand model and tilt match the session's)."""
+    from app.hand.data import load_hand_dims
+    from app.settings import ENGINE_VERSION
+
+    tilts = sorted({d.cmc_tilt for d in designs})
+    meta = {
+        "settings_key": settings.key(),
+        "hand_hash": load_hand_dims().content_hash,
+        "engine_version": ENGINE_VERSION,
+        "cmc_tilt": tilts[0] if len(tilts) == 1 else tilts,
+        "objects": names,
+        "n_gh": n_gh,
+        "gh_stride": args.gh_stride,
+        "executor": args.executor,
+        "grasps_simulated": getattr(res, "computed", None),
+        "elapsed_s": round(elapsed_s, 1),
+        "produced_by": "handbench " + " ".join(sys.argv[1:]),
+    }
+    path.write_text(json.dumps(meta, indent=2))
+
+
 def cmd_sweep(args: argparse.Namespace) -> int:
     from app.objects import load_object
     from app.plots import plot_bars, plot_contour, plot_lines
@@ -254,10 +291,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     plot_contour(rows, out / "contour.png")
     plot_bars(rows, out / "bars.png", names_disp, n_gh)
     (out / "settings.json").write_text(json.dumps(settings.as_dict(), indent=2))
+    elapsed = time.perf_counter() - t0
+    _write_sweep_meta(out / "meta.json", settings, designs, names, n_gh, args, elapsed, res)
     best = max(rows, key=lambda r: -1.0 if r["total_sgas_pct"] is None else r["total_sgas_pct"])
     print(
         f"{len(designs)} designs x {len(names)} objects: {res.computed} grasps simulated in "
-        f"{time.perf_counter() - t0:.1f} s"
+        f"{elapsed:.1f} s"
     )
     total = best["total_sgas_pct"]
     print(

@@ -3,7 +3,10 @@
 On the same hand placements (the base stage of each sampled hypothesis), every finger that
 closes is closed twice, sequential mode: by ``app.closing.close_finger`` and by
 ``app.closing_naive.close_finger_naive``. Prints the time and FCL-query ratios and how often
-the final joint angles agree within 0.5°. Asserts nothing.
+the final joint angles agree within 0.5°. Then, on the same sample, whole grasps (approach
+as ours, every finger including the thumb closed by each method, judged alike): per-object
+and total S_GAS of the sample by both, and how often FC and correctness agree. Asserts
+nothing.
 
 Usage: .venv/bin/python benchmarks/bench_naive.py [--sample 40] [--step 0.01]
 """
@@ -15,12 +18,50 @@ import time
 
 import numpy as np
 
+import app.simulate as simulate_module
 from app.closing import ClosingStats, Obstacles, close_finger
 from app.closing_naive import close_finger_naive
+from app.judge import judge
 from app.objects import OBJECT_KEYS, load_object
 from app.settings import SimSettings
-from app.simulate import closing_fingers, simulate_base
+from app.simulate import closing_fingers, simulate_base, simulate_thumb
 from app.sweep import _kit, cached_hypotheses
+
+
+def whole_grasps(sample: int, step: float) -> None:
+    """S_GAS of the sampled GHs with our closing and with the naive one (every finger)."""
+    s = SimSettings()
+    kit = _kit(0.0, 45.0, "ulnar")
+
+    def naive(chain, bodies, T, obstacles, settings, stats, first_stage=None):  # noqa: ANN001
+        del first_stage
+        return close_finger_naive(chain, bodies, T, obstacles, settings, stats, step_rad=step)
+
+    rows = []
+    for key in OBJECT_KEYS:
+        obj, hy = load_object(key), cached_hypotheses(key)
+        got = {}
+        for name, closer in (("ours", close_finger), ("naive", naive)):
+            simulate_module.close_finger = closer  # the one seam: which closing runs
+            out = []
+            for i in range(0, len(hy), sample):
+                base = simulate_base(kit, obj, hy, i, s)
+                o = judge(simulate_thumb(kit, obj, base, s), obj, s, 0)
+                out.append((o.is_fc, o.is_correct))
+            got[name] = np.array(out, dtype=bool)
+        simulate_module.close_finger = close_finger
+        a, b = got["ours"], got["naive"]
+
+        def sgas(x: np.ndarray) -> float:
+            return 100.0 * (x[:, 1].sum() + 0.5 * (x[:, 0] & ~x[:, 1]).sum()) / len(x)
+
+        rows.append((key, len(a), sgas(a), sgas(b), (a == b).all(axis=1).mean() * 100))
+    print(f"whole grasps, every {sample}th GH      : S_GAS % ours / naive, outcome agreement")
+    for key, n, sa, sb, ag in rows:
+        print(f"  {key:14s} n={n:4d}            : {sa:5.1f} / {sb:5.1f}   {ag:5.1f} % same")
+    ta = float(np.mean([r[2] for r in rows]))
+    tb = float(np.mean([r[3] for r in rows]))
+    print(f"  total S_GAS (mean of objects)      : {ta:5.1f} / {tb:5.1f}  (diff {tb - ta:+.1f} pt)")
 
 
 def main() -> None:
@@ -86,6 +127,7 @@ def main() -> None:
         f"(worst difference {worst:.1f} deg; near-tangent contacts amplify one naive "
         f"step of {np.rad2deg(args.step):.2f} deg)"
     )
+    whole_grasps(args.sample, args.step)
 
 
 if __name__ == "__main__":
