@@ -50,6 +50,8 @@ def _samples(shape: Shape, spacing: float) -> tuple[np.ndarray, np.ndarray]:
     return shape.surface_points(spacing)
 
 
+#: A patch holds the link samples within this distance of the link's nearest point (mm).
+PATCH_RADIUS_MM = 30.0
 #: Cell size of the coarse samples that screen a link's surface samples (mm).
 COARSE_CELL_MM = 4.0
 #: Lipschitz constant assumed of object SDFs (exact ones: 1; bilinear tables: <= sqrt 2).
@@ -74,27 +76,34 @@ def _coarse(shape: Shape, spacing: float) -> tuple[np.ndarray, np.ndarray, float
 def near_surface(
     obj: object,
     shape: Shape,
-    p_object: np.ndarray,
-    candidates: np.ndarray,
+    T_object_link: np.ndarray,
+    centre_link: np.ndarray,
+    radius: float,
     tol: float,
     spacing: float,
 ) -> np.ndarray:
-    """Indices of the shape's samples ``p_object`` (K, 3) among ``candidates`` (K,) bool whose
-    signed distance to the object is <= ``tol``, in sample order.
+    """Indices of the shape's surface samples within ``radius`` of ``centre_link`` (link
+    frame) whose signed distance to the object, with the link posed at ``T_object_link``, is
+    <= ``tol``; in sample order.
 
     Exact screening: the SDF is evaluated on coarse samples first; a sample whose coarse
-    sample c lies farther than ``tol + L·δ`` (δ the largest sample-to-coarse distance, L the
-    SDF's Lipschitz bound) cannot be within ``tol``, so only the others are evaluated."""
+    sample lies farther than ``tol + L·δ`` from the object (δ the largest sample-to-coarse
+    distance, L the SDF's Lipschitz bound) cannot be within ``tol``, so only the others are
+    posed and evaluated."""
+    p_link, _ = _samples(shape, spacing)
     idx_c, assign, delta = _coarse(shape, spacing)
-    use_c = np.zeros(len(idx_c), dtype=bool)
-    use_c[np.unique(assign[candidates])] = True
-    sd_c = np.full(len(idx_c), np.inf)
-    sd_c[use_c] = obj.sdf(p_object[idx_c[use_c]])  # type: ignore[attr-defined]
-    screen = candidates & (sd_c <= tol + SDF_LIPSCHITZ * delta)[assign]
-    idx = np.flatnonzero(screen)
+    R, t = T_object_link[:3, :3], T_object_link[:3, 3]
+    pc = p_link[idx_c]
+    use_c = np.flatnonzero(((pc - centre_link) ** 2).sum(1) < (radius + delta) ** 2)
+    keep_c = np.zeros(len(idx_c), dtype=bool)
+    if len(use_c):
+        sd_c = obj.sdf(pc[use_c] @ R.T + t)  # type: ignore[attr-defined]
+        keep_c[use_c[sd_c <= tol + SDF_LIPSCHITZ * delta]] = True
+    idx = np.flatnonzero(keep_c[assign])
+    idx = idx[((p_link[idx] - centre_link) ** 2).sum(1) < radius**2]
     if len(idx) == 0:
         return idx
-    sd = obj.sdf(p_object[idx])  # type: ignore[attr-defined]
+    sd = obj.sdf(p_link[idx] @ R.T + t)  # type: ignore[attr-defined]
     return idx[sd <= tol]
 
 
@@ -122,9 +131,17 @@ def link_patch(
     """Patch points (K, 3) and contact normals (K, 3) of one touching link, object frame."""
     p_link, _ = _samples(shape, settings.sample_spacing_mm)
     R, t = T_object_link[:3, :3], T_object_link[:3, 3]
-    p = p_link @ R.T + t
-    near = ((p - nearest_on_link) ** 2).sum(1) < (30.0**2)  # cheap pre-filter
-    p = p[near_surface(obj, shape, p, near, settings.contact_tol_mm, settings.sample_spacing_mm)]
+    centre_link = (nearest_on_link - t) @ R  # patches reach at most PATCH_RADIUS_MM from it
+    idx = near_surface(
+        obj,
+        shape,
+        T_object_link,
+        centre_link,
+        PATCH_RADIUS_MM,
+        settings.contact_tol_mm,
+        settings.sample_spacing_mm,
+    )
+    p = p_link[idx] @ R.T + t
     if len(p) == 0:  # sampling missed a grazing contact: keep FCL's nearest point
         p = nearest_on_link[None, :]
     p = p[farthest_points(p, settings.max_points_per_link)]
