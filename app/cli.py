@@ -308,6 +308,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_bruteforce(args: argparse.Namespace) -> int:
+    import os
+
     from app.gqm import GQMSettings
     from app.gqm.compare import run_comparison
 
@@ -334,7 +336,7 @@ def cmd_bruteforce(args: argparse.Namespace) -> int:
                 executor=ex,
                 max_grasps=args.max_grasps,
                 seed=args.seed,
-                workers=args.workers or 1,
+                workers=args.workers or os.cpu_count() or 1,
                 hypothesis_set=hset,
                 progress=sys.stderr.isatty(),
                 picture=not args.no_picture,
@@ -346,7 +348,8 @@ def cmd_bruteforce(args: argparse.Namespace) -> int:
     sec = res.seconds
     print(
         f"{res.simulated} grasps simulated ({sec['simulate']:.1f} s), {len(res.scored)} FC "
-        f"grasps scored ({sec['gqm']:.1f} s), tables ({sec['write']:.1f} s); "
+        f"grasps scored, GQMs of {res.gqm_computed} computed, the rest from the store "
+        f"({sec['gqm']:.1f} s), tables ({sec['write']:.1f} s); "
         f"total {time.perf_counter() - t0:.1f} s"
     )
     md = next((q for q in res.paths if q.suffix == ".md"), None)
@@ -473,7 +476,12 @@ def build_parser() -> argparse.ArgumentParser:
         "one per link (faster)",
     )
     s.add_argument("--no-picture", action="store_true", help="skip bruteforce_winners.png")
-    s.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
+    s.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help="processes of both stages, simulation and GQMs (default: cores)",
+    )
     s.add_argument(
         "--executor",
         choices=("local", "inline", "ray"),

@@ -27,6 +27,14 @@ One ``ResultStore`` may be shared by threads (calls are serialised by a lock); a
 must not share one: each process opens its own, or (as ``app.sweep`` does) only the parent
 writes.
 
+Grasp quality measures
+----------------------
+The brute-force comparison (``app.gqm.compare``) keeps each scored grasp's ten GQMs in a
+second table, ``gqms``, keyed by ``(design_key, object_key, settings_key, gqm_key, gh_id)``
+(``gqm_key``: hash of the GQM settings and the GQMs' code version), so a rerun scores only
+the grasps it lacks. The table is optional: it is created on the first GQM write, a store
+without it is still a valid schema-1 store (no GQMs yet), and an older handbench ignores it.
+
 Errors
 ------
 A path that is not a handbench results database — not SQLite at all, SQLite of another
@@ -283,6 +291,19 @@ _OUT_COLS = (
     "is_fc, is_correct, epsilon, n_queries, q_final, n_contacts, c_dtype, c_points, "
     "c_normals, c_links, c_palmar, reasons, extra"
 )
+
+#: The optional table of grasp quality measures (module docstring), created on first write.
+_GQM_SCHEMA = """
+CREATE TABLE IF NOT EXISTS gqms (
+    design_key   TEXT NOT NULL,
+    object_key   TEXT NOT NULL,
+    settings_key TEXT NOT NULL,
+    gqm_key      TEXT NOT NULL,
+    gh_id        TEXT NOT NULL,
+    gqm_values   TEXT NOT NULL,     -- JSON object: GQM name -> value (float repr: exact)
+    PRIMARY KEY (design_key, object_key, settings_key, gqm_key, gh_id)
+)
+"""
 
 
 # --------------------------------------------------------------------------- store
@@ -605,6 +626,88 @@ class ResultStore:
                 (design_key, settings_key),
             ).fetchall()
         return {r[0]: (int(r[1]), int(r[2] or 0), int(r[3] or 0)) for r in rows}
+
+    # ------------------------------------------------------------------ GQMs
+    _gqm_table_ready: bool = False  # set per instance once the gqms table is known to exist
+
+    def _has_gqm_table(self, create: bool) -> bool:
+        """Whether the ``gqms`` table exists; ``create`` makes it (writable stores only)."""
+        if self._gqm_table_ready:
+            return True
+        with self._guard() as db:
+            found = db.execute(
+                "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'gqms'"
+            ).fetchone()
+        if found is None and create:
+            self._writable()
+            with self.transaction(), self._guard() as db:
+                db.execute(_GQM_SCHEMA)
+            found = (1,)
+        self._gqm_table_ready = found is not None
+        return self._gqm_table_ready
+
+    def put_gqms(
+        self,
+        design_key: str,
+        object_key: str,
+        settings_key: str,
+        gqm_key: str,
+        values: Mapping[str, Mapping[str, float]],
+    ) -> None:
+        """Store the GQMs of grasps (gh_id → {GQM name → value}) in one transaction; existing
+        rows are replaced. Values are kept exactly (NaN and ±inf included)."""
+        self._writable()
+        self._has_gqm_table(create=True)
+        rows = [
+            (
+                design_key, object_key, settings_key, gqm_key, str(gh),
+                json.dumps({str(k): float(v) for k, v in vals.items()}),
+            )
+            for gh, vals in values.items()
+        ]  # fmt: skip
+        with self.transaction(), self._guard() as db:
+            db.executemany(
+                "INSERT OR REPLACE INTO gqms (design_key, object_key, settings_key, gqm_key, "
+                "gh_id, gqm_values) VALUES (?, ?, ?, ?, ?, ?)",
+                rows,
+            )
+
+    def get_gqms(
+        self,
+        design_key: str,
+        object_key: str,
+        settings_key: str,
+        gqm_key: str,
+        gh_ids: Sequence[str],
+    ) -> dict[str, dict[str, float]]:
+        """The stored GQMs among ``gh_ids`` (gh_id → {GQM name → value}; absent ids left out)."""
+        if not self._has_gqm_table(create=False):
+            return {}
+        out: dict[str, dict[str, float]] = {}
+        ids = list(dict.fromkeys(gh_ids))
+        with self._guard() as db:
+            for i in range(0, len(ids), _MAX_VARS):
+                chunk = ids[i : i + _MAX_VARS]
+                rows = db.execute(
+                    "SELECT gh_id, gqm_values FROM gqms WHERE design_key = ? AND object_key = ? "
+                    f"AND settings_key = ? AND gqm_key = ? AND gh_id IN "
+                    f"({', '.join('?' * len(chunk))})",
+                    (design_key, object_key, settings_key, gqm_key, *chunk),
+                ).fetchall()
+                for gh, text in rows:
+                    out[gh] = {str(k): float(v) for k, v in json.loads(text).items()}
+        return out
+
+    def count_gqms(self, gqm_key: str | None = None) -> int:
+        """Number of stored GQM rows (of one ``gqm_key``, or all)."""
+        if not self._has_gqm_table(create=False):
+            return 0
+        with self._guard() as db:
+            if gqm_key is None:
+                return int(db.execute("SELECT COUNT(*) FROM gqms").fetchone()[0])
+            return int(
+                db.execute("SELECT COUNT(*) FROM gqms WHERE gqm_key = ?", (gqm_key,)).fetchone()[0]
+            )
 
     # ------------------------------------------------------------------ metadata
     def _writable(self) -> None:

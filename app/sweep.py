@@ -282,14 +282,19 @@ def plan_tasks(
     settings: SimSettings,
     chunk: int = DEFAULT_CHUNK,
     gh_stride: int = 1,
+    hypothesis_set: str = "anthropomorphic",
 ) -> list[Task]:
-    """Tasks for every (design, object, GH) not yet in the store (every ``gh_stride``-th GH)."""
+    """Tasks for every (design, object, GH) not yet in the store (every ``gh_stride``-th GH).
+
+    ``hypothesis_set`` (one of ``HYPOTHESIS_SETS``) picks the hypotheses and the store's
+    object key (``hypotheses_of``/``set_object_key``); the default is the benchmark's.
+    """
     skey = settings.key()
     dkeys = [design_key(d) for d in designs]
     tasks: list[Task] = []
     for name in object_names:
-        hyps = cached_hypotheses(name)
-        okey = object_key(name)
+        hyps = hypotheses_of(name, hypothesis_set)
+        okey = set_object_key(name, hypothesis_set)
         present = [store.present_ids(dk, okey, skey) for dk in dkeys]
         subset = list(range(0, len(hyps), gh_stride))
         for start in range(0, len(subset), chunk):
@@ -301,7 +306,7 @@ def plan_tasks(
                 if missing:
                     groups.setdefault(missing, []).append(d)
             for missing, ds in groups.items():
-                tasks.append(Task(name, missing, tuple(ds), settings))
+                tasks.append(Task(name, missing, tuple(ds), settings, hypothesis_set))
     return tasks
 
 

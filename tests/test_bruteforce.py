@@ -1,8 +1,11 @@
-"""Brute-force grasp hypotheses (METHOD §3b): grid, ray casting, counts, ids, store keys."""
+"""Brute-force grasp hypotheses (METHOD §3b): grid, ray casting, counts, ids, store keys; the
+brute-force comparison (METHOD §6): planning, simulation and GQM scoring, resumable."""
 
 from __future__ import annotations
 
+import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,10 +20,23 @@ from app.bruteforce import (
     first_hits,
 )
 from app.design import ThumbDesign
+from app.errors import StoreError
+from app.gqm import GQM_NAMES, GQMSettings, compare
+from app.gqm.compare import run_comparison, simulate_bf
 from app.hand.model import build_hand
 from app.objects import OBJECT_KEYS, load_object
 from app.settings import SimSettings
-from app.sweep import Task, hypotheses_of, object_key, run_task, set_object_key
+from app.store import ResultStore
+from app.sweep import (
+    InlineExecutor,
+    Task,
+    design_key,
+    hypotheses_of,
+    object_key,
+    plan_tasks,
+    run_task,
+    set_object_key,
+)
 
 ID_RE = re.compile(r"^[a-z_]+/bf/f[0-5]/i\d{2}j\d{2}/d[01]/t[0-4]$")
 
@@ -122,3 +138,163 @@ def test_run_task_closes_all_fingers_and_keeps_pose() -> None:
         assert np.linalg.norm(np.cross(off, h.ray_object[i])) < 1e-6
         # a PP object, yet middle, ring and little closed too (all fingers close)
         assert np.all((o.q_final_rad[6:] - q_open[6:]).reshape(3, 3).max(axis=1) > 0.1)
+
+
+# ----------------------------------------------------------------------------- planning
+def test_plan_tasks_hypothesis_set(tmp_path) -> None:
+    """The benchmark's plan is unchanged by default; a brute-force plan covers that set."""
+    designs = [ThumbDesign(0, 45), ThumbDesign(15, 60)]
+    s = SimSettings()
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        anthro = plan_tasks(store, designs, ["washer"], s)
+        n_anthro = len(hypotheses_of("washer"))
+        assert sum(len(t.gh) for t in anthro) == n_anthro
+        assert {t.hypothesis_set for t in anthro} == {"anthropomorphic"}
+        assert all(t.designs == tuple(designs) for t in anthro)
+        bf = plan_tasks(store, designs, ["washer"], s, chunk=7, hypothesis_set="brute_force")
+        h = hypotheses_of("washer", "brute_force")
+        assert sorted(i for t in bf for i in t.gh) == list(range(len(h)))
+        assert {t.hypothesis_set for t in bf} == {"brute_force"} and max(len(t.gh) for t in bf) == 7
+        # a stored brute-force outcome is planned no more, for that design only; the
+        # benchmark's plan does not see it (another object key)
+        o = run_task(Task("washer", (0,), (designs[0],), s, "brute_force"))[0][2]
+        store.put_many(design_key(designs[0]), set_object_key("washer", "brute_force"), s.key(),
+                       {h.ids[0]: o})  # fmt: skip
+        bf2 = plan_tasks(store, designs, ["washer"], s, chunk=7, hypothesis_set="brute_force")
+        assert [t.designs for t in bf2 if 0 in t.gh] == [(designs[1],)]
+        assert sum(len(t.gh) * len(t.designs) for t in bf2) == 2 * len(h) - 1
+        assert plan_tasks(store, designs, ["washer"], s) == anthro
+
+
+# ----------------------------------------------------------------------------- comparison
+DESIGN = ThumbDesign(0, 45)
+
+
+@pytest.fixture(scope="module")
+def bf_store(tmp_path_factory) -> Path:
+    """A throwaway store with the washer's brute-force outcomes (40 GHs) for DESIGN."""
+    path = tmp_path_factory.mktemp("bf") / "r.sqlite"
+    with ResultStore(path) as store:
+        n = simulate_bf(
+            [DESIGN], ["washer"], store, SimSettings(), InlineExecutor(), progress=False
+        )
+    assert n == len(hypotheses_of("washer", "brute_force"))
+    return path
+
+
+def test_simulate_bf_stores_outcomes_and_resumes(bf_store: Path, tmp_path) -> None:
+    s = SimSettings()
+    h = hypotheses_of("washer", "brute_force")
+    store_copy = tmp_path / "r.sqlite"
+    with ResultStore(bf_store, readonly=True) as src:
+        okey = set_object_key("washer", "brute_force")
+        got = src.get_many(design_key(DESIGN), okey, s.key(), h.ids)
+        assert set(got) == set(h.ids)  # every brute-force GH, under the ':bf' key
+        assert src.count(design_key(DESIGN), object_key("washer"), s.key()) == 0
+        assert dict(src.objects())[okey] == {"key": "washer", "hypothesis_set": "brute_force"}
+        for gh, o in got.items():
+            T = np.asarray(o.extra["T_object_palm"])
+            assert T.shape == (4, 4)
+            assert np.allclose(T[:3, :3], h.R_object_palm[h.ids.index(gh)])
+            assert o.is_correct <= o.is_fc
+        assert any(o.is_fc for o in got.values())
+        with ResultStore(store_copy) as dst:  # a second store: the rerun must not simulate
+            dst.put_many(design_key(DESIGN), okey, s.key(), got)
+            again = simulate_bf([DESIGN], ["washer"], dst, s, InlineExecutor(), progress=False)
+            assert again == 0
+            assert dst.count(design_key(DESIGN), okey, s.key()) == len(h)
+
+
+def test_store_gqms_roundtrip(tmp_path) -> None:
+    vals = {
+        "a/1": {"Q_A1": 0.1 + 0.2, "Q_C1": 1e-300, "Q_C2": float("nan")},
+        "a/2": {"Q_A1": -0.0, "Q_C1": float("inf"), "Q_C2": 1 / 3},
+    }
+    path = tmp_path / "r.sqlite"
+    with ResultStore(path) as store:
+        assert store.get_gqms("d", "o", "s", "g", ["a/1"]) == {} and store.count_gqms() == 0
+    with ResultStore(path, readonly=True) as ro:  # a store without the table: no GQMs
+        assert ro.get_gqms("d", "o", "s", "g", ["a/1"]) == {} and ro.count_gqms() == 0
+        with pytest.raises(StoreError):
+            ro.put_gqms("d", "o", "s", "g", vals)
+    with ResultStore(path) as store:
+        store.put_gqms("d", "o", "s", "g", vals)
+        store.put_gqms("d", "o", "s", "g2", {"a/1": {"Q_A1": 2.0}})
+        got = store.get_gqms("d", "o", "s", "g", ["a/1", "a/2", "a/3"])
+        assert store.count_gqms() == 3 and store.count_gqms("g") == 2
+    assert set(got) == {"a/1", "a/2"}
+    for gh, v in vals.items():
+        assert list(got[gh]) == list(v)  # names in order
+        for k, x in v.items():
+            y = got[gh][k]
+            assert (math.isnan(x) and math.isnan(y)) or (
+                x == y and math.copysign(1, x) == math.copysign(1, y)
+            )
+
+
+def _copy_store(src: Path, dst: Path) -> None:
+    with ResultStore(src, readonly=True) as a, ResultStore(dst) as b:
+        s = SimSettings()
+        okey = set_object_key("washer", "brute_force")
+        ids = hypotheses_of("washer", "brute_force").ids
+        b.put_many(
+            design_key(DESIGN), okey, s.key(), a.get_many(design_key(DESIGN), okey, s.key(), ids)
+        )
+
+
+def test_run_comparison_resumes_gqms(bf_store: Path, tmp_path, monkeypatch) -> None:
+    """A rerun reads every GQM from the store (0 computed) and finds the same values."""
+    store_path = tmp_path / "r.sqlite"
+    _copy_store(bf_store, store_path)
+    monkeypatch.setattr(compare, "GQM_CHUNK", 1)  # three jobs: the first run uses the pool
+
+    def run(out: str, **kw) -> compare.ComparisonResult:
+        return run_comparison(
+            [DESIGN], ["washer"], store, tmp_path / out, executor=InlineExecutor(),
+            max_grasps=3, progress=False, picture=False, **kw,
+        )  # fmt: skip
+
+    with ResultStore(store_path) as store:
+        first = run("a", workers=2)
+        second = run("b")
+        assert store.count_gqms(GQMSettings().key()) == 3
+        # other GQM settings are another key: computed again, not mixed up
+        link = run("c", gqm=GQMSettings(wrench_contacts="link"))
+    assert first.simulated == 0 and first.gqm_computed == len(first.scored) == 3
+    assert second.simulated == 0 and second.gqm_computed == 0
+    assert [(s.gh_id, s.values) for s in first.scored] == [
+        (s.gh_id, s.values) for s in second.scored
+    ]
+    assert all(tuple(s.values) == GQM_NAMES for s in second.scored)
+    assert link.gqm_computed == 3
+    for name in ("bruteforce_table.csv", "bruteforce_gqms.csv", "bruteforce_wins.csv"):
+        assert (tmp_path / "a" / name).read_text() == (tmp_path / "b" / name).read_text()
+
+
+class _Stop(Exception):
+    pass
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_interrupted_scoring_keeps_finished_jobs(
+    bf_store: Path, tmp_path, monkeypatch, workers: int
+) -> None:
+    """Jobs finished before an interruption are stored; the rerun computes only the rest."""
+    store_path = tmp_path / "r.sqlite"
+    _copy_store(bf_store, store_path)
+    monkeypatch.setattr(compare, "GQM_CHUNK", 1)  # one job per grasp
+    s = SimSettings()
+    with ResultStore(store_path) as store:
+        drawn = {("washer", DESIGN): compare.draw_fc(store, "washer", DESIGN, s, 3, 0)}
+
+        def stop(n: int) -> None:
+            raise _Stop
+
+        with pytest.raises(_Stop):
+            compare.score_grasps(drawn, None, workers, stop, store, s)
+        assert store.count_gqms() == 1  # the first job landed before the interruption
+        run = compare.score_grasps(drawn, None, 1, None, store, s)
+    assert run.computed == 2 and len(run.scored) == 3
+    fresh = compare.score_grasps(drawn)  # no store: everything computed, same values
+    assert fresh.computed == 3
+    assert [x.values for x in fresh.scored] == [x.values for x in run.scored]

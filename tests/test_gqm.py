@@ -234,3 +234,73 @@ def test_link_contacts_reduce_patches() -> None:
     assert np.allclose(lc.n[2], np.array([0, 1, 1]) / math.sqrt(2))
     ws = grasp_wrench_space(lc.p, lc.n, np.zeros(3), 10.0, 0.4, 8)
     assert ws.W.shape == (3 * 8, 6)
+
+
+# ----------------------------------------------------------------------------- wrench hull
+CAN_R, CAN_CENTROID, CAN_MAX_R = 37.5, np.array([0.0, 0.0, 125.0]), 130.5
+
+
+def can_grip(rng: np.random.Generator, n_links: int) -> tuple[np.ndarray, np.ndarray]:
+    """Real-looking cylindrical-grip contacts (the chips can, r 37.5 mm): ``n_links`` patches
+    of 6 points within ±5° and ±4 mm on the can with inward radial normals, spread around it,
+    and a flat palm patch of 6 points sharing one normal (the palm against the can's side)."""
+    p, n = [], []
+    slots = rng.uniform(0, 2 * np.pi) + 2 * np.pi * np.arange(n_links + 1) / (n_links + 1)
+    for k in range(n_links):  # the links wrap around the can, the palm takes the last slot
+        phi = slots[k] + rng.uniform(-0.09, 0.09, 6)
+        z = rng.uniform(80, 170) + rng.uniform(-4, 4, 6)
+        radial = np.stack([np.cos(phi), np.sin(phi), np.zeros(6)], axis=1)
+        p.append(CAN_R * radial + np.stack([0 * z, 0 * z, z], axis=1))
+        n.append(-radial)
+    phi0, z0 = slots[-1], rng.uniform(80, 170)
+    radial = np.array([np.cos(phi0), np.sin(phi0), 0.0])
+    tangent = np.array([-np.sin(phi0), np.cos(phi0), 0.0])
+    uv = rng.uniform(-3, 3, size=(6, 2))
+    p.append(CAN_R * radial + [0, 0, z0] + uv[:, :1] * tangent + uv[:, 1:] * [0, 0, 1.0])
+    n.append(np.tile(-radial, (6, 1)))
+    return np.concatenate(p), np.concatenate(n)
+
+
+def plain_hull(W: np.ndarray) -> tuple[float, float] | None:
+    """ε and volume of scipy's ConvexHull with default options (None if qhull fails)."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        h = ConvexHull(W)
+    except QhullError:
+        return None
+    return float(np.min(-h.equations[:, -1])), float(h.volume)
+
+
+@pytest.mark.parametrize("case", ["random", "can"])
+def test_wrench_hull_equals_plain_qhull(case: str) -> None:
+    """Q_C1/Q_C2's hull gives scipy's plain ConvexHull ε and volume (1e-9 relative), and
+    every primitive wrench lies inside every facet (a correct hull, not just a repeatable one)."""
+    rng = np.random.default_rng(11)
+    for _ in range(2):
+        if case == "random":
+            p = rng.normal(size=(12, 3))
+            p = R_OBJ * p / np.linalg.norm(p, axis=1, keepdims=True)
+            n = -p / R_OBJ + rng.normal(scale=0.3, size=(12, 3))
+            n /= np.linalg.norm(n, axis=1, keepdims=True)
+            W = primitive_wrenches(p, n, np.zeros(3), R_OBJ)
+        else:
+            p, n = can_grip(rng, 4)
+            W = primitive_wrenches(p, n, CAN_CENTROID, CAN_MAX_R)
+        ws = wrench_hull(W)
+        ref = plain_hull(W)
+        if ref is None:  # qhull's precision error: the hull is retried with QJ
+            assert ws.volume > 0
+            continue
+        eps, vol = ref
+        assert ws.epsilon == pytest.approx(eps, rel=1e-9) and eps > 0
+        assert ws.volume == pytest.approx(vol, rel=1e-9) and vol > 0
+        viol = W @ ws.equations[:, :6].T + ws.equations[:, 6]
+        assert np.max(viol) < 1e-12 * np.max(np.abs(W))
+        assert q_c1(ws) == ws.epsilon and q_c2(ws) == ws.volume
+
+
+def test_gqm_settings_key() -> None:
+    a, b = GQMSettings(), GQMSettings(wrench_contacts="link")
+    assert a.key() == GQMSettings().key() and a.key() != b.key()
+    assert a.key() != GQMSettings(mu=0.5).key() and len(a.key()) == 16

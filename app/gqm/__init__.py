@@ -26,7 +26,7 @@ object wrenches ``[f; (p − c) × f / r]``, c the object's centroid, r its larg
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Literal, Protocol
 
 import numpy as np
@@ -46,11 +46,17 @@ from app.gqm.d2 import q_d2
 from app.gqm.grasp_matrix import grasp_matrix, grasp_singular_values
 from app.gqm.hand_jacobian import hand_jacobian
 from app.gqm.wrench_space import WrenchSpace, grasp_wrench_space
+from app.store import stable_hash
 
 #: The ten measures, in table order.
 GQM_NAMES: tuple[str, ...] = (
     "Q_A1", "Q_A2", "Q_A3", "Q_B1", "Q_B2", "Q_B3", "Q_C1", "Q_C2", "Q_D1", "Q_D2",
 )  # fmt: skip
+
+#: Version of the GQMs' definitions and code: part of ``GQMSettings.key()``, so stored
+#: values (``ResultStore.put_gqms``) are recomputed when a measure changes. Bump it with any
+#: change of a value beyond floating-point noise.
+GQM_VERSION = 1
 
 
 @dataclass(frozen=True)
@@ -65,6 +71,10 @@ class GQMSettings:
     """Wrench-space contact points: every patch point (the FC model) or one per link."""
     posture_joints: tuple[int, ...] = tuple(range(15))
     """Joint indices of Q_D1 (the closing joints: all of them in the brute-force set)."""
+
+    def key(self) -> str:
+        """Store key of these settings and ``GQM_VERSION`` (``ResultStore.put_gqms``)."""
+        return stable_hash({"gqm_version": GQM_VERSION, **asdict(self)})
 
 
 class GraspLike(Protocol):
@@ -113,4 +123,11 @@ def wrench_space_of(
     )  # fmt: skip
 
 
-__all__ = ["GQM_NAMES", "GQMSettings", "GraspLike", "compute_gqms", "wrench_space_of"]
+__all__ = [
+    "GQM_NAMES",
+    "GQM_VERSION",
+    "GQMSettings",
+    "GraspLike",
+    "compute_gqms",
+    "wrench_space_of",
+]

@@ -4,13 +4,17 @@ the ten GQMs, and find, per object and GQM, the design whose best grasp scores h
 Pipeline (``run_comparison``):
 
 1. Simulate the brute-force hypotheses (``app.bruteforce``) of every object under every
-   design with the sweep machinery (``app.sweep.Task``/``run_task`` and an executor). Results
-   go to the same results store under the object key ``object_key(name) + ':bf'``; a rerun
-   computes only what is missing.
+   design with the sweep machinery (``app.sweep.plan_tasks``/``execute_tasks`` and an
+   executor). Results go to the same results store under the object key
+   ``object_key(name) + ':bf'``; a rerun computes only what is missing.
 2. Per object and design: the stored FC grasps, of which up to ``max_grasps`` are drawn at
    random (``numpy.random.default_rng([seed, crc32('<object>|<design key>')])``, ids sorted
    first, so the draw is reproducible and independent of the store's row order).
-3. The ten GQMs of each drawn grasp (``app.gqm.compute_gqms``), in a process pool.
+3. The ten GQMs of each drawn grasp (``app.gqm.compute_gqms``), in a process pool, in jobs of
+   ``GQM_CHUNK`` grasps. Each finished job's values go to the store's ``gqms`` table at once
+   (keyed by design, object, simulation settings, ``GQMSettings.key()`` and GH id), so a
+   rerun computes only the GQMs it lacks and an interrupted run loses only the jobs in
+   flight.
 4. Table 3: per object and GQM, the design with the highest best-grasp value (ties: the
    first design in the order given); win counts per design; and whether each winning grasp
    meets the correctness criteria of the object's grasp type (``check_pp``/``check_cg``
@@ -22,8 +26,9 @@ from __future__ import annotations
 import csv
 import math
 import zlib
-from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from collections.abc import Callable, Generator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from contextlib import closing
 from dataclasses import dataclass
 from multiprocessing import get_context
 from pathlib import Path
@@ -39,45 +44,20 @@ from app.store import GraspOutcome, ResultStore
 from app.sweep import (
     Executor,
     Progress,
-    Task,
     _kit,
     design_key,
     execute_tasks,
     hypotheses_of,
+    plan_tasks,
     set_object_key,
 )
 
 BF_SET = "brute_force"
+#: Grasps per GQM job (the unit stored at once): a few seconds of cylindrical grips.
+GQM_CHUNK = 10
 
 
 # ----------------------------------------------------------------------------- simulation
-def plan_bf_tasks(
-    store: ResultStore,
-    designs: Sequence[ThumbDesign],
-    object_names: Sequence[str],
-    settings: SimSettings,
-    chunk: int = 60,
-    hypothesis_set: str = BF_SET,
-) -> list[Task]:
-    """Tasks for every (design, object, brute-force GH) not yet in the store."""
-    skey = settings.key()
-    tasks: list[Task] = []
-    for name in object_names:
-        hyps = hypotheses_of(name, hypothesis_set)
-        okey = set_object_key(name, hypothesis_set)
-        present = [store.present_ids(design_key(d), okey, skey) for d in designs]
-        for start in range(0, len(hyps), chunk):
-            idx = range(start, min(start + chunk, len(hyps)))
-            groups: dict[tuple[int, ...], list[ThumbDesign]] = {}
-            for d, have in zip(designs, present, strict=True):
-                missing = tuple(i for i in idx if hyps.ids[i] not in have)
-                if missing:
-                    groups.setdefault(missing, []).append(d)
-            for missing, ds in groups.items():
-                tasks.append(Task(name, missing, tuple(ds), settings, hypothesis_set))
-    return tasks
-
-
 def simulate_bf(
     designs: Sequence[ThumbDesign],
     object_names: Sequence[str],
@@ -95,7 +75,7 @@ def simulate_bf(
     for name in object_names:
         meta = {"key": name, "hypothesis_set": hypothesis_set}
         store.put_object_meta(set_object_key(name, hypothesis_set), meta)
-    tasks = plan_bf_tasks(store, designs, object_names, settings, hypothesis_set=hypothesis_set)
+    tasks = plan_tasks(store, designs, object_names, settings, hypothesis_set=hypothesis_set)
     return execute_tasks(
         tasks,
         store,
@@ -124,6 +104,10 @@ class Scored:
     """The ten GQMs."""
 
 
+#: A GQM job: object key, design (cmc_deg, mcp_deg, cmc_tilt), (GH id, outcome) pairs, settings.
+_Job = tuple[str, tuple[float, float, str], list[tuple[str, GraspOutcome]], GQMSettings]
+
+
 @dataclass(frozen=True)
 class _Pose:
     q: np.ndarray
@@ -131,9 +115,7 @@ class _Pose:
     contacts: object
 
 
-def _gqm_job(
-    job: tuple[str, tuple[float, float, str], list[tuple[str, GraspOutcome]], GQMSettings],
-) -> list[dict[str, float]]:
+def _gqm_job(job: _Job) -> list[dict[str, float]]:
     name, design, items, settings = job
     obj = load_object(name)
     hand = _kit(*design).hand
@@ -163,34 +145,103 @@ def draw_fc(
     return [(fc[i], got[fc[i]]) for i in pick]
 
 
+@dataclass
+class ScoreRun:
+    """What ``score_grasps`` did."""
+
+    scored: list[Scored]
+    """Every drawn grasp with its GQMs, in the order drawn."""
+    computed: int
+    """Grasps whose GQMs were computed in this run (the others came from the store)."""
+
+
+def _run_jobs(
+    jobs: Sequence[_Job], workers: int
+) -> Generator[tuple[int, list[dict[str, float]]], None, None]:
+    """(job index, values) of every job as it finishes, over ``workers`` processes.
+
+    At most ``2 · workers`` jobs are queued; on an exception (Ctrl-C included) the queued
+    ones are cancelled and the pool is not waited for.
+    """
+    if workers <= 1 or len(jobs) <= 1:
+        for i, job in enumerate(jobs):
+            yield i, _gqm_job(job)
+        return
+    pool = ProcessPoolExecutor(min(workers, len(jobs)), mp_context=get_context("spawn"))
+    try:
+        pending: dict[Future, int] = {}
+        queue = list(range(len(jobs)))[::-1]
+        while queue or pending:
+            while queue and len(pending) < 2 * workers:
+                i = queue.pop()
+                pending[pool.submit(_gqm_job, jobs[i])] = i
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for f in done:
+                yield pending.pop(f), f.result()
+    except BaseException:
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+
+
 def score_grasps(
     drawn: dict[tuple[str, ThumbDesign], list[tuple[str, GraspOutcome]]],
     settings: GQMSettings | None = None,
     workers: int = 1,
     on_done: Callable[[int], None] | None = None,
-) -> list[Scored]:
-    """GQMs of every drawn grasp, one job per (object, design), over ``workers`` processes."""
+    store: ResultStore | None = None,
+    sim: SimSettings | None = None,
+    hypothesis_set: str = BF_SET,
+) -> ScoreRun:
+    """GQMs of every drawn grasp, in jobs of ``GQM_CHUNK`` grasps over ``workers`` processes.
+
+    With a ``store`` (and the ``sim`` settings the outcomes were simulated with), GQMs
+    already stored for (design, object set key, ``sim.key()``, ``settings.key()``, GH id)
+    are read instead of computed, and every finished job is stored in one transaction.
+    ``on_done(n)`` is called after each job with its number of grasps.
+    """
     s = settings or GQMSettings()
+    if store is not None and sim is None:
+        raise ValueError("score_grasps: a store needs the simulation settings (sim)")
+    gkey = s.key()
+    skey = sim.key() if sim is not None else ""
     keys = [k for k, v in drawn.items() if v]
-    jobs = [(name, (d.cmc_deg, d.mcp_deg, d.cmc_tilt), drawn[(name, d)], s) for name, d in keys]
-    if workers > 1 and len(jobs) > 1:
-        with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as pool:
-            results = []
-            for r in pool.map(_gqm_job, jobs):
-                results.append(r)
-                if on_done:
-                    on_done(len(r))
-    else:
-        results = []
-        for j in jobs:
-            results.append(_gqm_job(j))
+    store_keys = {
+        (name, d): (design_key(d), set_object_key(name, hypothesis_set)) for name, d in keys
+    }
+    values: dict[tuple[str, ThumbDesign], dict[str, dict[str, float]]] = {}
+    jobs: list[_Job] = []
+    job_key: list[tuple[str, ThumbDesign]] = []
+    for name, d in keys:
+        items = drawn[(name, d)]
+        have: dict[str, dict[str, float]] = {}
+        if store is not None:
+            dkey, okey = store_keys[(name, d)]
+            have = store.get_gqms(dkey, okey, skey, gkey, [gh for gh, _ in items])
+        values[(name, d)] = have
+        missing = [(gh, o) for gh, o in items if gh not in have]
+        for start in range(0, len(missing), GQM_CHUNK):
+            jobs.append(
+                (name, (d.cmc_deg, d.mcp_deg, d.cmc_tilt), missing[start : start + GQM_CHUNK], s)
+            )
+            job_key.append((name, d))
+    computed = 0
+    with closing(_run_jobs(jobs, workers)) as finished:  # closed early: the pool is stopped
+        for i, vals in finished:
+            got = {gh: v for (gh, _), v in zip(jobs[i][2], vals, strict=True)}
+            if store is not None:
+                dkey, okey = store_keys[job_key[i]]
+                store.put_gqms(dkey, okey, skey, gkey, got)
+            values[job_key[i]].update(got)
+            computed += len(got)
             if on_done:
-                on_done(len(results[-1]))
-    out: list[Scored] = []
-    for (name, d), vals in zip(keys, results, strict=True):
-        for (gh, o), v in zip(drawn[(name, d)], vals, strict=True):
-            out.append(Scored(name, d, gh, o, v))
-    return out
+                on_done(len(got))
+    scored = [
+        Scored(name, d, gh, o, values[(name, d)][gh])
+        for name, d in keys
+        for gh, o in drawn[(name, d)]
+    ]
+    return ScoreRun(scored, computed)
 
 
 # ----------------------------------------------------------------------------- Table 3
@@ -416,6 +467,25 @@ class ComparisonResult:
     """Files written."""
     seconds: dict[str, float]
     """Wall time of each stage: 'simulate', 'gqm', 'write'."""
+    gqm_computed: int = 0
+    """Grasps whose GQMs were computed in this run (the rest came from the store)."""
+
+
+def _count_missing(
+    store: ResultStore,
+    drawn: dict[tuple[str, ThumbDesign], list[tuple[str, GraspOutcome]]],
+    sim: SimSettings,
+    gqm: GQMSettings,
+    hypothesis_set: str,
+) -> int:
+    """Drawn grasps whose GQMs are not in the store yet (for the progress bar)."""
+    skey, gkey = sim.key(), gqm.key()
+    n = 0
+    for (name, d), items in drawn.items():
+        ids = [gh for gh, _ in items]
+        okey = set_object_key(name, hypothesis_set)
+        n += len(ids) - len(store.get_gqms(design_key(d), okey, skey, gkey, ids))
+    return n
 
 
 def run_comparison(
@@ -447,9 +517,11 @@ def run_comparison(
         for n in object_names
         for d in designs
     }
-    total = sum(len(v) for v in drawn.values())
-    bar = Progress(total, "GQM grasps") if progress and total else None
-    scored = score_grasps(drawn, gqm, workers, bar.update if bar else None)
+    gqm = gqm or GQMSettings()
+    total = _count_missing(store, drawn, sim, gqm, hypothesis_set) if progress else 0
+    bar = Progress(total, "GQM grasps") if total else None
+    run = score_grasps(drawn, gqm, workers, bar.update if bar else None, store, sim, hypothesis_set)
+    scored = run.scored
     if bar:
         bar.close()
     t2 = time.perf_counter()
@@ -465,4 +537,5 @@ def run_comparison(
         winners,
         paths,
         {"simulate": t1 - t0, "gqm": t2 - t1, "write": t3 - t2},
+        run.computed,
     )

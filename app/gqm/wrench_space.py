@@ -13,6 +13,12 @@ exactly); its facets ``a_k · x + b_k ≤ 0`` (|a_k| = 1) give ε = min_k(−b_k
 ``fc_and_epsilon`` (a test checks it), and its volume is Q_C2. If qhull fails on a
 nearly degenerate set (precision errors), the hull is retried once with ``QJ`` (joggled
 input, perturbation ~1e-11 relative); if that fails too, ε = volume = 0.
+
+Cost: this hull is nearly all of a grasp's GQM time (0.2–0.5 s for the brute-force grasps,
+``benchmarks/bench_gqm.py``): 90–100 % of the patch wrenches are hull vertices and the hull
+has ~130 facets per vertex, so exact pruning gains little, and the qhull options that are
+faster (``Q5``, ``QJ``) change the values. ``docs/bruteforce.md`` (Costs) lists what was
+measured, including an exact ε without the full hull, which saves nothing while Q_C2 needs it.
 """
 
 from __future__ import annotations
