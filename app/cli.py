@@ -472,8 +472,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--wrench-contacts",
         choices=("patch", "link"),
         default="patch",
-        help="Q_C1/Q_C2 contact points: every patch point (FC model, default) or "
-        "one per link (faster)",
+        help="Q_C1 contact points: every patch point (FC model, default) or one per "
+        "link; Q_C2 always uses one per link (docs/bruteforce.md)",
     )
     s.add_argument("--no-picture", action="store_true", help="skip bruteforce_winners.png")
     s.add_argument(

@@ -298,3 +298,30 @@ def test_interrupted_scoring_keeps_finished_jobs(
     fresh = compare.score_grasps(drawn)  # no store: everything computed, same values
     assert fresh.computed == 3
     assert [x.values for x in fresh.scored] == [x.values for x in run.scored]
+
+
+def test_gqms_of_simulated_grasps_wrench_measures(bf_store: Path) -> None:
+    """On simulated washer grasps: Q_C1 is the ε of the full hull of every patch point's
+    primitive wrenches (1e-9 relative), Q_C2 the volume of the per-link contacts' hull."""
+    from app.force_closure import primitive_wrenches
+    from app.gqm import compute_gqms
+    from app.gqm.contacts import link_contacts
+    from app.gqm.wrench_space import wrench_hull
+
+    s = SimSettings()
+    obj = load_object("washer")
+    hand = compare._kit(DESIGN.cmc_deg, DESIGN.mcp_deg, DESIGN.cmc_tilt).hand
+    c, r = np.asarray(obj.centroid_object, float), float(obj.max_radius)
+    with ResultStore(bf_store, readonly=True) as store:
+        drawn = compare.draw_fc(store, "washer", DESIGN, s, 4, 0)
+    assert drawn
+    for _, o in drawn:
+        cs = o.contacts
+        pose = compare._Pose(o.q_final_rad, np.asarray(o.extra["T_object_palm"], float), cs)
+        vals = compute_gqms(pose, obj, hand)  # type: ignore[arg-type]
+        patch = wrench_hull(primitive_wrenches(cs.p_object, cs.n_object, c, r))
+        lc = link_contacts(cs)
+        link = wrench_hull(primitive_wrenches(lc.p, lc.n, c, r))
+        assert vals["Q_C1"] == pytest.approx(max(patch.epsilon, 0.0), rel=1e-9, abs=1e-15)
+        assert vals["Q_C2"] == link.volume
+        assert len(link.W) < len(patch.W)

@@ -1,4 +1,5 @@
-"""The ten GQMs: analytic cases, ε against a QP, the hand Jacobian against finite differences."""
+"""The ten GQMs: analytic cases, ε against a QP and the full hull (the grown-hull ε), the
+hand Jacobian against finite differences."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import pytest
 from app.contact_set import ContactSet
 from app.force_closure import fc_and_epsilon, primitive_wrenches
 from app.force_closure_lp import distance_to_hull
-from app.gqm import GQM_NAMES, GQMSettings, compute_gqms
+from app.gqm import GQM_NAMES, GQM_VERSION, GQMSettings, compute_gqms
 from app.gqm.a1 import q_a1
 from app.gqm.a2 import q_a2
 from app.gqm.a3 import q_a3
@@ -23,6 +24,7 @@ from app.gqm.c2 import q_c2
 from app.gqm.contacts import link_contacts
 from app.gqm.d1 import q_d1
 from app.gqm.d2 import hand_object_jacobian, q_d2
+from app.gqm.epsilon import TOL_REL, grown_epsilon
 from app.gqm.grasp_matrix import grasp_matrix, grasp_singular_values
 from app.gqm.hand_jacobian import hand_jacobian
 from app.gqm.wrench_space import grasp_wrench_space, wrench_hull
@@ -109,9 +111,10 @@ def test_q_c1_matches_fc_and_epsilon_and_qp() -> None:
     p, n = fc_sphere_contacts()
     W = primitive_wrenches(p, n, np.zeros(3), R_OBJ)
     ws = wrench_hull(W)
-    eps = q_c1(ws)
+    eps = q_c1(W)
     fc, eps_ref = fc_and_epsilon(W)
-    assert fc and eps > 0 and eps == pytest.approx(eps_ref, rel=1e-12)
+    assert fc and eps > 0 and eps == pytest.approx(eps_ref, rel=1e-9)
+    assert ws.epsilon == pytest.approx(eps_ref, rel=1e-12)
     rng = np.random.default_rng(2)
     U = rng.normal(size=(12, 6))
     U /= np.linalg.norm(U, axis=1, keepdims=True)
@@ -122,7 +125,7 @@ def test_q_c1_matches_fc_and_epsilon_and_qp() -> None:
     assert distance_to_hull(W, 1.05 * eps * u_star)[0] > 1e-4  # ... beyond the closest facet
     # not FC (all contacts on one hemisphere, pushing the same way): Q_C1 = 0
     W_half = primitive_wrenches(p[:3], n[:3], np.zeros(3), R_OBJ)
-    assert q_c1(wrench_hull(W_half)) == 0.0
+    assert q_c1(W_half) == 0.0 and wrench_hull(W_half).epsilon < 0
 
 
 def test_q_c2_cross_polytope_volume() -> None:
@@ -297,10 +300,171 @@ def test_wrench_hull_equals_plain_qhull(case: str) -> None:
         assert ws.volume == pytest.approx(vol, rel=1e-9) and vol > 0
         viol = W @ ws.equations[:, :6].T + ws.equations[:, 6]
         assert np.max(viol) < 1e-12 * np.max(np.abs(W))
-        assert q_c1(ws) == ws.epsilon and q_c2(ws) == ws.volume
+        assert q_c1(W) == pytest.approx(ws.epsilon, rel=1e-9) and q_c2(ws) == ws.volume
 
 
 def test_gqm_settings_key() -> None:
     a, b = GQMSettings(), GQMSettings(wrench_contacts="link")
     assert a.key() == GQMSettings().key() and a.key() != b.key()
     assert a.key() != GQMSettings(mu=0.5).key() and len(a.key()) == 16
+
+
+# ----------------------------------------------------------------------------- grown ε
+def cross_polytope(t: np.ndarray | None = None) -> np.ndarray:
+    """±e_i (6-D), translated by t: facets s·x ≤ 1 (s ∈ {±1}⁶), ε = (1 − ‖t‖₁)/√6."""
+    W = np.vstack([np.eye(6), -np.eye(6)])
+    return W if t is None else W + t
+
+
+def hypercube(rng: np.random.Generator, n_inner: int) -> np.ndarray:
+    """{±1}⁶ and ``n_inner`` points strictly inside it: ε = 1, twelve facets tied."""
+    corners = np.array(np.meshgrid(*[[-1.0, 1.0]] * 6)).reshape(6, -1).T
+    return np.vstack([corners, rng.uniform(-0.95, 0.95, size=(n_inner, 6))])
+
+
+def test_grown_epsilon_analytic() -> None:
+    g = grown_epsilon(cross_polytope())  # 64 facets tied at the minimum
+    assert g.method == "grown" and g.epsilon == pytest.approx(1 / math.sqrt(6), rel=1e-12)
+    t = np.array([0.1, 0.05, -0.02, 0.0, 0.03, -0.01])
+    g = grown_epsilon(cross_polytope(t))
+    assert g.method == "grown" and g.epsilon == pytest.approx(0.79 / math.sqrt(6), rel=1e-12)
+    rng = np.random.default_rng(3)
+    W = hypercube(rng, 300)
+    g = grown_epsilon(W)
+    assert g.method == "grown" and g.epsilon == pytest.approx(1.0, rel=1e-12)
+    assert g.n_used < 64  # stopped before every corner was in the sub-hull
+    # rotation invariant, scales with W
+    R = np.linalg.qr(rng.normal(size=(6, 6)))[0]
+    assert grown_epsilon(2.5 * W @ R.T).epsilon == pytest.approx(2.5, rel=1e-12)
+
+
+def test_grown_epsilon_origin_outside_or_degenerate() -> None:
+    """Where the sub-hull argument does not apply, ε is the full hull's value, identical."""
+    for t in (np.array([0.6, 0.5, 0, 0, 0, 0]), np.array([0.5, 0.5, 0, 0, 0, 0])):
+        W = cross_polytope(t)  # ‖t‖₁ > 1: origin outside; = 1: on the boundary
+        g = grown_epsilon(W)
+        assert g.method == "full hull" and g.epsilon == wrench_hull(W).epsilon
+        assert g.epsilon <= 1e-12 and q_c1(W) == 0.0
+    assert grown_epsilon(cross_polytope(np.array([0.6, 0.5, 0, 0, 0, 0]))).epsilon < 0
+    W = hypercube(np.random.default_rng(4), 20)
+    W[:, 5] = 0.0  # rank 5
+    for V in (W, W[:5] + 1.0):  # rank 5; fewer than 7 wrenches
+        g = grown_epsilon(V)
+        assert g.method == "degenerate" and g.epsilon == 0.0 == wrench_hull(V).epsilon
+
+
+def test_grown_epsilon_first_sub_hull_flat() -> None:
+    """Two wrenches extreme along every ±e_i: the first sub-hull fails, more directions join."""
+    rng = np.random.default_rng(6)
+    W = np.vstack([np.full(6, 5.0), np.full(6, -5.0), rng.normal(size=(200, 6))])
+    assert len(np.unique(np.argmax(W @ np.vstack([np.eye(6), -np.eye(6)]).T, axis=0))) == 2
+    g = grown_epsilon(W)
+    assert g.method == "grown" and g.epsilon == pytest.approx(wrench_hull(W).epsilon, rel=1e-9)
+
+
+def wrench_sets(rng: np.random.Generator) -> list[np.ndarray]:
+    """Random clouds around the origin, random-sphere contacts, cylindrical grips."""
+    out = []
+    for shift in (0.0, 0.8, 1.5):  # the origin deep inside, nearer the boundary, outside
+        X = rng.normal(size=(300, 6))
+        out.append(X + shift * X.std(0) * np.eye(6)[0])
+    for k in (6, 12):
+        p = rng.normal(size=(k, 3))
+        p = R_OBJ * p / np.linalg.norm(p, axis=1, keepdims=True)
+        n = -p / R_OBJ + rng.normal(scale=0.3, size=(k, 3))
+        out.append(primitive_wrenches(p, n / np.linalg.norm(n, axis=1, keepdims=True),
+                                      np.zeros(3), R_OBJ))  # fmt: skip
+    for n_links in (2, 4):
+        p, n = can_grip(rng, n_links)
+        out.append(primitive_wrenches(p, n, CAN_CENTROID, CAN_MAX_R))
+    return out
+
+
+def test_grown_epsilon_equals_full_hull() -> None:
+    """The grown ε is plain qhull's full-hull ε (1e-9 relative) on random and realistic sets,
+    with sub-hulls smaller than the full hull's vertex set where the origin is inside."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    rng = np.random.default_rng(12)
+    grown = 0
+    for W in wrench_sets(rng) + wrench_sets(rng):
+        try:
+            h = ConvexHull(W)
+        except QhullError:
+            continue
+        eps = float(np.min(-h.equations[:, -1]))
+        g = grown_epsilon(W)
+        if eps > 1e-9:
+            assert g.method == "grown"
+            assert g.epsilon == pytest.approx(eps, rel=1e-9)
+            assert g.n_used < len(h.vertices)
+            grown += 1
+        else:
+            assert g.method == "full hull" and g.epsilon == wrench_hull(W).epsilon
+    assert grown >= 8
+
+
+def test_sub_hull_facets_nearer_than_epsilon_are_cut() -> None:
+    """The exactness argument of ``app.gqm.epsilon``: for a subset S ⊆ W, ε(S) ≤ ε(W), and
+    every facet of conv(S) nearer than ε(W) has a wrench of W beyond it, so a nearest facet
+    of conv(S) with none beyond is at ε(W) exactly."""
+    from scipy.spatial import ConvexHull
+
+    rng = np.random.default_rng(5)
+    p, n = can_grip(rng, 4)
+    W = primitive_wrenches(p, n, CAN_CENTROID, CAN_MAX_R)
+    full = ConvexHull(W)
+    eps = float(np.min(-full.equations[:, -1]))
+    nearest = full.simplices[int(np.argmin(-full.equations[:, -1]))]
+    tol = TOL_REL * float(np.max(np.abs(W)))
+    cut = supported = 0
+    for size in (30, 60, 120):
+        for _ in range(3):
+            S = np.union1d(nearest, rng.choice(len(W), size, replace=False))
+            eq = ConvexHull(W[S]).equations
+            d = -eq[:, -1]
+            excess = np.max(W @ eq[:, :6].T, axis=0) - d
+            assert np.min(d) <= eps * (1 + 1e-12)
+            near = d < eps * (1 - 1e-9)
+            assert np.all(excess[near] > tol)
+            cut += int(np.sum(near))
+            k = int(np.argmin(d))
+            if excess[k] <= tol:
+                assert d[k] == pytest.approx(eps, rel=1e-9)
+                supported += 1
+    assert cut > 0 and supported > 0  # both branches of the argument were exercised
+
+
+def patch_grasp() -> tuple[object, SimpleNamespace, SimpleNamespace]:
+    """A force-closure grasp of a sphere (r = R_OBJ) by five links, six points per patch."""
+    hand, g, _ = _grasp_on_hand(7)
+    links = ["palm", "thumb_distal", "index_distal", "middle_middle", "ring_proximal"]
+    centres = np.array([[1, 0.1, 0], [-1, 0.1, 0.1], [0, 1, -0.1], [0.1, -1, 0], [0, 0.1, 1.0]])
+    rng = np.random.default_rng(8)
+    p, link = [], []
+    for name, u in zip(links, centres, strict=True):
+        q = u / np.linalg.norm(u) + rng.normal(scale=0.05, size=(6, 3))
+        p.append(R_OBJ * q / np.linalg.norm(q, axis=1, keepdims=True))
+        link += [name] * 6
+    P = np.concatenate(p)
+    cs = ContactSet(P, -P / R_OBJ, np.array(link, dtype=object), np.ones(len(P), bool))
+    obj = SimpleNamespace(centroid_object=np.zeros(3), max_radius=R_OBJ)
+    return hand, SimpleNamespace(q=g.q, T_object_palm=g.T_object_palm, contacts=cs), obj
+
+
+def test_q_c1_on_patches_q_c2_per_link() -> None:
+    """Q_C1: the full patch hull's ε; Q_C2: the per-link hull's volume; ``wrench_contacts``
+    moves Q_C1 only."""
+    hand, g, obj = patch_grasp()
+    vals = compute_gqms(g, obj, hand)  # type: ignore[arg-type]
+    cs, lc = g.contacts, link_contacts(g.contacts)
+    W_patch = primitive_wrenches(cs.p_object, cs.n_object, np.zeros(3), R_OBJ)
+    W_link = primitive_wrenches(lc.p, lc.n, np.zeros(3), R_OBJ)
+    eps_patch, eps_link = wrench_hull(W_patch).epsilon, wrench_hull(W_link).epsilon
+    assert eps_patch > 0 and eps_link > 0 and eps_link != pytest.approx(eps_patch, rel=1e-3)
+    assert vals["Q_C1"] == pytest.approx(eps_patch, rel=1e-9)
+    vol_link = wrench_hull(W_link).volume
+    assert vals["Q_C2"] == vol_link and vol_link != pytest.approx(wrench_hull(W_patch).volume)
+    link = compute_gqms(g, obj, hand, GQMSettings(wrench_contacts="link"))  # type: ignore[arg-type]
+    assert link["Q_C1"] == pytest.approx(eps_link, rel=1e-9) and link["Q_C2"] == vals["Q_C2"]
+    assert GQM_VERSION >= 2  # version 1 stored Q_C2 of the patch hull: never reuse it

@@ -5,8 +5,8 @@ A link touching the object along a line or an area yields a patch of K_l points
 
     p_l = mean of the patch points,   n_l = normalised mean of the patch normals.
 
-The wrench-space measures (Q_C1, Q_C2) keep every patch point (METHOD §5's force-closure
-model), see ``app.gqm.wrench_space``.
+So does the wrench-space volume Q_C2; ε, Q_C1, keeps every patch point by default (METHOD
+§5's force-closure model), see ``app.gqm`` and ``app.gqm.epsilon``.
 """
 
 from __future__ import annotations

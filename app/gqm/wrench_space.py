@@ -1,24 +1,25 @@
-"""The grasp wrench space shared by Q_C1 and Q_C2: one qhull hull per grasp.
+"""The grasp wrench space: the qhull hull of primitive wrenches (Q_C2, and Q_C1's fallback).
 
 Primitive wrenches (METHOD §5, ``app.force_closure.primitive_wrenches``): every contact
 point p with unit normal n (link → object) and every edge f of its friction cone (μ, E
 edges, unit normal component) gives ``w = [f, (p − c) × f / r]`` (6,), c the object's
-centroid and r its largest radius. Contact points: every patch point (``"patch"``, the
-force-closure model of the benchmark, default) or one per link (``"link"``, the grasp-matrix
-model of ``app.gqm.contacts``, ~5× fewer points and ~20× faster hulls).
+centroid and r its largest radius. Q_C2 builds this hull on one contact per link (the
+grasp-matrix model of ``app.gqm.contacts``); Q_C1 finds ε on every patch point without the
+full hull (``app.gqm.epsilon``) and uses this hull only where that argument does not apply
+(origin not strictly inside, qhull errors on its sub-hulls).
 
-The hull ``conv(W)`` is built once (``scipy.spatial.ConvexHull``, the same options as
+The hull ``conv(W)`` (``scipy.spatial.ConvexHull``, the same options as
 ``app.force_closure.fc_and_epsilon``: scipy's default ``Qx``/``Qt`` for 6-D, input used
 exactly); its facets ``a_k · x + b_k ≤ 0`` (|a_k| = 1) give ε = min_k(−b_k), identical to
-``fc_and_epsilon`` (a test checks it), and its volume is Q_C2. If qhull fails on a
+``fc_and_epsilon`` (a test checks it), and its volume. If qhull fails on a
 nearly degenerate set (precision errors), the hull is retried once with ``QJ`` (joggled
 input, perturbation ~1e-11 relative); if that fails too, ε = volume = 0.
 
-Cost: this hull is nearly all of a grasp's GQM time (0.2–0.5 s for the brute-force grasps,
-``benchmarks/bench_gqm.py``): 90–100 % of the patch wrenches are hull vertices and the hull
-has ~130 facets per vertex, so exact pruning gains little, and the qhull options that are
-faster (``Q5``, ``QJ``) change the values. ``docs/bruteforce.md`` (Costs) lists what was
-measured, including an exact ε without the full hull, which saves nothing while Q_C2 needs it.
+Cost: a hull of the 250–700 patch wrenches of a brute-force grasp takes 0.2–0.65 s
+(``benchmarks/bench_gqm.py``): 90–100 % of them are hull vertices and the hull has ~130
+facets per vertex, so exact pruning gains little, and the qhull options that are faster
+(``Q5``, ``QJ``) change the values. The per-link hull (48–77 wrenches) takes 13–23 ms.
+``docs/bruteforce.md`` (Costs) lists what was measured.
 """
 
 from __future__ import annotations
@@ -50,7 +51,8 @@ class WrenchSpace(NamedTuple):
         return float(np.min(-self.equations[:, -1]))
 
 
-def _full_rank(W: np.ndarray) -> bool:
+def full_rank(W: np.ndarray) -> bool:
+    """rank(W) = 6 (σ_6 > RANK_REL_TOL · σ_1) of finite wrenches W (M ≥ 7, 6)."""
     if W.ndim != 2 or W.shape[1] != 6 or len(W) < 7 or not np.all(np.isfinite(W)):
         return False
     s = np.linalg.svd(W, compute_uv=False)
@@ -61,7 +63,7 @@ def wrench_hull(W: np.ndarray) -> WrenchSpace:
     """Hull of wrenches ``W`` (M, 6) (see the module docstring)."""
     W = np.asarray(W, float).reshape(-1, 6)
     empty = WrenchSpace(W, np.zeros((0, 7)), 0.0)
-    if not _full_rank(W):
+    if not full_rank(W):
         return empty
     for options in (None, "QJ"):
         try:
