@@ -257,6 +257,20 @@ def _write_sweep_meta(
     path.write_text(json.dumps(meta, indent=2))
 
 
+def _add_run_flags(s: argparse.ArgumentParser, workers_help: str) -> None:
+    """Flags of every command that simulates: workers, executor, store, and the settings."""
+    s.add_argument("--workers", type=int, default=None, help=workers_help)
+    s.add_argument(
+        "--executor",
+        choices=("local", "inline", "ray"),
+        default="local",
+        help="local process pool (default), inline, or a Ray cluster",
+    )
+    s.add_argument("--address", help="Ray cluster address (with --executor ray)")
+    s.add_argument("--store", help="results database (default ~/.cache/handbench/results.sqlite)")
+    add_settings_flags(s)
+
+
 def cmd_sweep(args: argparse.Namespace) -> int:
     from app.objects import load_object
     from app.plots import plot_bars, plot_contour, plot_lines
@@ -437,18 +451,7 @@ def build_parser() -> argparse.ArgumentParser:
             help="preview: only every K-th hypothesis of each object (default 1: "
             "all, as published)",
         )
-        s.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
-        s.add_argument(
-            "--executor",
-            choices=("local", "inline", "ray"),
-            default="local",
-            help="local process pool (default), inline, or a Ray cluster",
-        )
-        s.add_argument("--address", help="Ray cluster address (with --executor ray)")
-        s.add_argument(
-            "--store", help="results database (default ~/.cache/handbench/results.sqlite)"
-        )
-        add_settings_flags(s)
+        _add_run_flags(s, "processes (default: cores)")
         s.set_defaults(func=func)
 
     s = sub.add_parser("bruteforce", help="brute-force grasps: the ten GQMs, best design per GQM")
@@ -476,21 +479,7 @@ def build_parser() -> argparse.ArgumentParser:
         "link; Q_C2 always uses one per link (docs/bruteforce.md)",
     )
     s.add_argument("--no-picture", action="store_true", help="skip bruteforce_winners.png")
-    s.add_argument(
-        "--workers",
-        type=int,
-        default=None,
-        help="processes of both stages, simulation and GQMs (default: cores)",
-    )
-    s.add_argument(
-        "--executor",
-        choices=("local", "inline", "ray"),
-        default="local",
-        help="local process pool (default), inline, or a Ray cluster",
-    )
-    s.add_argument("--address", help="Ray cluster address (with --executor ray)")
-    s.add_argument("--store", help="results database (default ~/.cache/handbench/results.sqlite)")
-    add_settings_flags(s)
+    _add_run_flags(s, "processes of both stages, simulation and GQMs (default: cores)")
     s.set_defaults(func=cmd_bruteforce)
 
     s = sub.add_parser("objects", help="list objects or import a mesh")
