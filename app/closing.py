@@ -154,7 +154,7 @@ def advance_stage(
         gap = np.linalg.norm(c_link[:, None, :] - sph[None, finite, :3], axis=-1)
         lb_arr[:, finite] = gap - chain.reach[:, None] - sph[None, finite, 3]
     lb_arr[~mask] = np.inf
-    # per moving link: pair bounds (list) and which of them are exact at the current probe
+    # per moving link: lower bounds of its distance to each obstacle (exact once queried)
     lb: dict[int, list[float]] = {k: lb_arr[k].tolist() for k in moving}
     T_fcl = chain.T_link_fcl
     inf = float("inf")
@@ -186,7 +186,7 @@ def advance_stage(
                 if not posed:
                     bodies[k].setTransform(fcl_transform(T_links[k] @ T_fcl[k]))
                     posed = True
-                row[p] = float(fcl.distance(bodies[k], objs[p], _REQ, fcl.DistanceResult()))
+                row[p] = pair_distance(bodies[k], objs[p])
                 stats.queries += 1
                 exact[p] = True
             g = min(row)
@@ -198,6 +198,9 @@ def advance_stage(
                 else:
                     self_hit.append(k)
         return obj_hit, self_hit, g_min
+
+    def snapshot() -> dict[int, list[float]]:
+        return {k: list(r) for k, r in lb.items()}
 
     def set_bounds(base: dict[int, list[float]], rates: np.ndarray, t: float) -> None:
         for k in moving:
@@ -216,7 +219,7 @@ def advance_stage(
             # ending when the gap is within REFINE_BAND of tol from below
             q0, g0, lb0, rates0, step = safe
             lo_t, lo_f, hi_t, hi_f = 0.0, g0 - tol, step, g - tol
-            lb_hi = {k: list(r) for k, r in lb.items()}
+            lb_hi = snapshot()
             side = 0
             for _ in range(REFINE_ITERS):
                 if hi_f >= -REFINE_BAND * tol:
@@ -228,7 +231,7 @@ def advance_stage(
                 if o or s_:
                     hi_t, hi_f = t, gm - tol
                     touching_obj, touching_self = o, s_
-                    lb_hi = {k: list(r) for k, r in lb.items()}
+                    lb_hi = snapshot()
                     if side == -1:
                         lo_f *= 0.5
                     side = -1
@@ -257,7 +260,7 @@ def advance_stage(
         with np.errstate(divide="ignore"):
             steps = (gaps - 0.5 * tol) / rates[first:]
         step = min(float(steps.min()), float(room.min()))
-        safe = (q, g, {k: list(r) for k, r in lb.items()}, rates, step)
+        safe = (q, g, snapshot(), rates, step)
         q = np.minimum(q + v * step, np.where(v > 0, chain.q_upper, q))
         set_bounds(safe[2], rates, step)
     stats.capped += 1

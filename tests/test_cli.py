@@ -71,6 +71,24 @@ def _store(tmp_path: Path) -> list[str]:
     return ["--store", str(tmp_path / "results.sqlite")]
 
 
+def _ray_sweep(tmp_path: Path) -> list[str]:
+    """A one-design, one-object sweep on the Ray executor."""
+    return [
+        "sweep",
+        "--executor",
+        "ray",
+        "--cmc",
+        "0",
+        "--mcp",
+        "45",
+        "--object",
+        "washer",
+        "--out",
+        str(tmp_path / "out"),
+        *_store(tmp_path),
+    ]
+
+
 def test_evaluate_nan_angle(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     code, out, err = _run(capsys, "evaluate", "--cmc", "nan", "--mcp", "45", *_store(tmp_path))
     assert code == 2
@@ -107,23 +125,7 @@ def test_sweep_bad_range(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> 
 
 def test_sweep_unreachable_ray_cluster(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     pytest.importorskip("ray", reason="Ray is not installed: pip install 'handbench[ray]'")
-    code, _, err = _run(
-        capsys,
-        "sweep",
-        "--executor",
-        "ray",
-        "--address",
-        "127.0.0.1:1",
-        "--cmc",
-        "0",
-        "--mcp",
-        "45",
-        "--object",
-        "washer",
-        "--out",
-        str(tmp_path / "out"),
-        *_store(tmp_path),
-    )
+    code, _, err = _run(capsys, *_ray_sweep(tmp_path), "--address", "127.0.0.1:1")
     assert code == 2
     assert "127.0.0.1:1" in err and "Traceback" not in err
 
@@ -154,20 +156,6 @@ def test_ray_executor_without_ray(
     capsys: pytest.CaptureFixture[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setitem(sys.modules, "ray", None)  # `import ray` now raises ImportError
-    code, _, err = _run(
-        capsys,
-        "sweep",
-        "--executor",
-        "ray",
-        "--cmc",
-        "0",
-        "--mcp",
-        "45",
-        "--object",
-        "washer",
-        "--out",
-        str(tmp_path / "out"),
-        *_store(tmp_path),
-    )
+    code, _, err = _run(capsys, *_ray_sweep(tmp_path))
     assert code == 2
     assert "pip install 'handbench[ray]'" in err
