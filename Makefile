@@ -2,6 +2,7 @@
 #   make serve   -> creates .venv if missing, installs, runs the design explorer
 #   make test    -> creates .venv if missing, installs test extras (+ Debian chromium as root),
 #                   then lint, format check, type check, all tests (browser tests included)
+#   make test-fast -> lint and the fast tests only (the edit loop; CI runs make test)
 SHELL := /bin/bash
 PYTHON ?= python3
 VENV := .venv
@@ -11,7 +12,7 @@ CHROMIUM := /usr/bin/chromium
 HOST ?= 127.0.0.1
 PORT ?= 8080
 
-.PHONY: serve test lint typecheck pytest chromium setup sweep bench clean
+.PHONY: serve test test-fast lint typecheck pytest chromium setup sweep bench clean
 
 $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -46,6 +47,12 @@ pytest: $(STAMP) chromium
 	$(PY) -m pytest -q
 
 test: lint typecheck pytest
+
+# the edit loop: no browser, Ray, process pool or subprocess tests (under a minute)
+FAST := not (browser or ray or pool or subprocess or slow)
+test-fast: $(STAMP)
+	$(VENV)/bin/ruff check .
+	$(PY) -m pytest -q -m "$(FAST)"
 
 sweep: $(STAMP)
 	$(VENV)/bin/handbench sweep --out out/sweep

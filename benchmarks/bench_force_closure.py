@@ -9,8 +9,8 @@ import time
 
 import numpy as np
 
-from app.force_closure import fc_and_epsilon, positively_spans, primitive_wrenches
-from app.force_closure_lp import is_force_closure_lp
+from app.quality.force_closure import fc_and_epsilon, positively_spans, primitive_wrenches
+from app.quality.force_closure_lp import is_force_closure_lp
 
 
 def contact_set(rng: np.random.Generator, k: int) -> np.ndarray:

@@ -6,10 +6,10 @@ Usage: .venv/bin/python benchmarks/bench_gqm.py [--objects small_marker chips_ca
 
 1. Simulates every ``--gh-stride``-th brute-force GH of each object for one design (baseline
    CMC 0°, MCP 45°) into a throwaway store (or ``--store``), and draws up to ``--grasps`` of
-   the FC grasps per object (``app.gqm.compare.draw_fc``).
+   the FC grasps per object (``app.runs.gqm_compare.draw_fc``).
 2. The GQM stage per grasp, one process without the store: GQM_VERSION 1 (Q_C1 and Q_C2 on
    one full hull of every patch point, ``v1_wrench_measures``) against the product (Q_C1 by
-   the grown hull, ``app.gqm.epsilon``; Q_C2 on per-link contacts); then ``--workers``
+   the grown hull, ``app.quality.gqm.epsilon``; Q_C2 on per-link contacts); then ``--workers``
    processes writing the store (first run), and the rerun (every GQM read from the store;
    with a reused ``--store`` that already holds them, the first run computes none either).
 3. Per object, per grasp (CPU): the ten GQMs before and after, the eight others, Q_C1's
@@ -40,27 +40,24 @@ from scipy.optimize import nnls
 from scipy.spatial import ConvexHull, QhullError
 from scipy.stats import spearmanr
 
-import app.gqm as gqm_pkg
-from app.contact_set import ContactSet
-from app.design import ThumbDesign
-from app.force_closure import primitive_wrenches
-from app.gqm import GQMSettings, compute_gqms, epsilon_wrenches, wrench_measures
-from app.gqm.compare import (
-    BF_SET,
-    GQM_CHUNK,
-    _gqm_job,
-    _kit,
-    _Pose,
-    draw_fc,
-    score_grasps,
-)
-from app.gqm.contacts import LinkContacts, link_contacts
-from app.gqm.epsilon import grown_epsilon
-from app.gqm.wrench_space import wrench_hull
-from app.objects import load_object
-from app.settings import SimSettings
-from app.store import GraspOutcome, ResultStore
-from app.sweep import InlineExecutor, LocalExecutor, execute_tasks, plan_tasks, set_object_key
+import app.quality.gqm as gqm_pkg
+from app.model.contact_set import ContactSet
+from app.model.design import ThumbDesign
+from app.model.objects import load_object
+from app.quality.force_closure import primitive_wrenches
+from app.quality.gqm import GQMSettings, compute_gqms, epsilon_wrenches, wrench_measures
+from app.quality.gqm.contacts import LinkContacts, link_contacts
+from app.quality.gqm.epsilon import grown_epsilon
+from app.quality.gqm.wrench_space import wrench_hull
+from app.quality.outcome import GraspOutcome
+from app.quality.settings import SimSettings
+from app.runs.executors import InlineExecutor, LocalExecutor
+from app.runs.gqm_compare import BF_SET, GQM_CHUNK, _gqm_job, _Pose, draw_fc, score_grasps
+from app.runs.keys import set_object_key
+from app.runs.store import ResultStore
+from app.runs.sweep import execute_tasks
+from app.runs.tasks import plan_tasks
+from app.sim.simulate import cached_kit
 
 
 def v1_wrench_measures(
@@ -149,7 +146,7 @@ def analyse(
 ) -> dict[str, np.ndarray]:
     """Print where one grasp's GQM time goes, before and after; the per-grasp columns."""
     obj = load_object(name)
-    hand = _kit(design.cmc_deg, design.mcp_deg, design.cmc_tilt).hand
+    hand = cached_kit(design.cmc_deg, design.mcp_deg, design.cmc_tilt).hand
     c, r = np.asarray(obj.centroid_object, float), float(obj.max_radius)
     s = GQMSettings()
     rows = []

@@ -9,8 +9,8 @@ import time
 
 import numpy as np
 
-from app.hand.model import build_hand
-from app.simulate import HandKit
+from app.model.hand.model import build_hand
+from app.sim.simulate import HandKit
 
 
 def main() -> None:

@@ -1,8 +1,8 @@
 """Our closing against a naive fixed-step closing (0.01 rad, as older simulators do).
 
 On the same hand placements (the base stage of each sampled hypothesis), every finger that
-closes is closed twice, sequential mode: by ``app.closing.close_finger`` and by
-``app.closing_naive.close_finger_naive``. Prints the time and FCL-query ratios and how often
+closes is closed twice, sequential mode: by ``app.sim.closing.close_finger`` and by
+``app.sim.closing_naive.close_finger_naive``. Prints the time and FCL-query ratios and how often
 the final joint angles agree within 0.5°. Then, on the same sample, whole grasps (approach
 as ours, every finger including the thumb closed by each method, judged alike): per-object
 and total S_GAS of the sample by both, and how often FC and correctness agree. Asserts
@@ -18,20 +18,20 @@ import time
 
 import numpy as np
 
-import app.simulate as simulate_module
-from app.closing import ClosingStats, Obstacles, close_finger
-from app.closing_naive import close_finger_naive
-from app.judge import judge
-from app.objects import OBJECT_KEYS, load_object
-from app.settings import SimSettings
-from app.simulate import closing_fingers, simulate_base, simulate_thumb
-from app.sweep import _kit, cached_hypotheses
+import app.sim.simulate as simulate_module
+from app.model.objects import OBJECT_KEYS, load_object
+from app.quality.judge import judge
+from app.quality.settings import SimSettings
+from app.sim.closing import ClosingStats, Obstacles, close_finger
+from app.sim.closing_naive import close_finger_naive
+from app.sim.hypothesis_sets import cached_hypotheses
+from app.sim.simulate import cached_kit, closing_fingers, simulate_base, simulate_thumb
 
 
 def whole_grasps(sample: int, step: float) -> None:
     """S_GAS of the sampled GHs with our closing and with the naive one (every finger)."""
     s = SimSettings()
-    kit = _kit(0.0, 45.0, "ulnar")
+    kit = cached_kit(0.0, 45.0, "ulnar")
 
     def naive(chain, bodies, T, obstacles, settings, stats, first_stage=None):  # noqa: ANN001
         del first_stage
@@ -70,7 +70,7 @@ def main() -> None:
     ap.add_argument("--step", type=float, default=0.01, help="naive step, rad")
     args = ap.parse_args()
     s = SimSettings()
-    kit = _kit(0.0, 45.0, "ulnar")
+    kit = cached_kit(0.0, 45.0, "ulnar")
     t_ours = t_naive = 0.0
     q_ours = q_naive = 0
     n_fingers = agree = 0

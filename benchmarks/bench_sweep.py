@@ -18,20 +18,22 @@ import tempfile
 import time
 from pathlib import Path
 
-from app.closing import ClosingStats
-from app.design import ThumbDesign, published_designs
-from app.judge import judge
-from app.objects import OBJECT_KEYS, load_object
-from app.settings import SimSettings
-from app.simulate import simulate_base, simulate_thumb
-from app.store import ResultStore
-from app.sweep import LocalExecutor, _kit, cached_hypotheses, run_sweep
+from app.model.design import ThumbDesign, published_designs
+from app.model.objects import OBJECT_KEYS, load_object
+from app.quality.judge import judge
+from app.quality.settings import SimSettings
+from app.runs.executors import LocalExecutor
+from app.runs.store import ResultStore
+from app.runs.sweep import run_sweep
+from app.sim.closing import ClosingStats
+from app.sim.hypothesis_sets import cached_hypotheses
+from app.sim.simulate import cached_kit, simulate_base, simulate_thumb
 
 
 def per_core_rates(sample: int) -> None:
     """Single-process timing of the two stages on every ``sample``-th GH of each object."""
     s = SimSettings()
-    kit = _kit(0.0, 45.0, "ulnar")
+    kit = cached_kit(0.0, 45.0, "ulnar")
     tb = tt = 0.0
     nb = nq_b = nq_t = 0
     # one-time set-up per process (object meshes, SDF tables, hypotheses), timed apart
@@ -40,7 +42,7 @@ def per_core_rates(sample: int) -> None:
         obj, hy = load_object(key), cached_hypotheses(key)
         simulate_thumb(kit, obj, simulate_base(kit, obj, hy, len(hy) - 1, s), s)
     print(f"first-use set-up, six objects        : {time.perf_counter() - t0:8.2f} s per process")
-    siblings = [_kit(0.0, m, "ulnar") for m in (0.0, 15.0, 30.0, 60.0, 75.0, 90.0)]
+    siblings = [cached_kit(0.0, m, "ulnar") for m in (0.0, 15.0, 30.0, 60.0, 75.0, 90.0)]
     tj = ts = 0.0
     ns = 0
     for key in OBJECT_KEYS:

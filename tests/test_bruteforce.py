@@ -11,7 +11,20 @@ import numpy as np
 import pytest
 import trimesh
 
-from app.bruteforce import (
+from app.errors import StoreError
+from app.model.design import ThumbDesign
+from app.model.hand.model import build_hand
+from app.model.objects import OBJECT_KEYS, load_object
+from app.quality.gqm import GQM_NAMES, GQMSettings
+from app.quality.settings import SimSettings
+from app.reports.table3 import write_comparison
+from app.runs import gqm_compare as compare
+from app.runs.executors import InlineExecutor
+from app.runs.gqm_compare import run_comparison, simulate_bf
+from app.runs.keys import design_key, object_key, set_object_key
+from app.runs.store import ResultStore
+from app.runs.tasks import Task, plan_tasks, run_task
+from app.sim.bruteforce import (
     BF_HAND_VECTOR_PALM,
     BruteForceSettings,
     brute_force_hypotheses,
@@ -19,24 +32,8 @@ from app.bruteforce import (
     face_grid,
     first_hits,
 )
-from app.design import ThumbDesign
-from app.errors import StoreError
-from app.gqm import GQM_NAMES, GQMSettings, compare
-from app.gqm.compare import run_comparison, simulate_bf
-from app.hand.model import build_hand
-from app.objects import OBJECT_KEYS, load_object
-from app.settings import SimSettings
-from app.store import ResultStore
-from app.sweep import (
-    InlineExecutor,
-    Task,
-    design_key,
-    hypotheses_of,
-    object_key,
-    plan_tasks,
-    run_task,
-    set_object_key,
-)
+from app.sim.hypothesis_sets import hypotheses_of
+from app.sim.simulate import cached_kit
 
 ID_RE = re.compile(r"^[a-z_]+/bf/f[0-5]/i\d{2}j\d{2}/d[01]/t[0-4]$")
 
@@ -242,6 +239,7 @@ def _copy_store(src: Path, dst: Path) -> None:
         )
 
 
+@pytest.mark.pool
 def test_run_comparison_resumes_gqms(bf_store: Path, tmp_path, monkeypatch) -> None:
     """A rerun reads every GQM from the store (0 computed) and finds the same values."""
     store_path = tmp_path / "r.sqlite"
@@ -249,10 +247,12 @@ def test_run_comparison_resumes_gqms(bf_store: Path, tmp_path, monkeypatch) -> N
     monkeypatch.setattr(compare, "GQM_CHUNK", 1)  # three jobs: the first run uses the pool
 
     def run(out: str, **kw) -> compare.ComparisonResult:
-        return run_comparison(
-            [DESIGN], ["washer"], store, tmp_path / out, executor=InlineExecutor(),
-            max_grasps=3, progress=False, picture=False, **kw,
+        res = run_comparison(
+            [DESIGN], ["washer"], store, executor=InlineExecutor(),
+            max_grasps=3, progress=False, **kw,
         )  # fmt: skip
+        write_comparison(res, [DESIGN], tmp_path / out, picture=False)
+        return res
 
     with ResultStore(store_path) as store:
         first = run("a", workers=2)
@@ -275,7 +275,7 @@ class _Stop(Exception):
     pass
 
 
-@pytest.mark.parametrize("workers", [1, 2])
+@pytest.mark.parametrize("workers", [1, pytest.param(2, marks=pytest.mark.pool)])
 def test_interrupted_scoring_keeps_finished_jobs(
     bf_store: Path, tmp_path, monkeypatch, workers: int
 ) -> None:
@@ -303,14 +303,14 @@ def test_interrupted_scoring_keeps_finished_jobs(
 def test_gqms_of_simulated_grasps_wrench_measures(bf_store: Path) -> None:
     """On simulated washer grasps: Q_C1 is the ε of the full hull of every patch point's
     primitive wrenches (1e-9 relative), Q_C2 the volume of the per-link contacts' hull."""
-    from app.force_closure import primitive_wrenches
-    from app.gqm import compute_gqms
-    from app.gqm.contacts import link_contacts
-    from app.gqm.wrench_space import wrench_hull
+    from app.quality.force_closure import primitive_wrenches
+    from app.quality.gqm import compute_gqms
+    from app.quality.gqm.contacts import link_contacts
+    from app.quality.gqm.wrench_space import wrench_hull
 
     s = SimSettings()
     obj = load_object("washer")
-    hand = compare._kit(DESIGN.cmc_deg, DESIGN.mcp_deg, DESIGN.cmc_tilt).hand
+    hand = cached_kit(DESIGN.cmc_deg, DESIGN.mcp_deg, DESIGN.cmc_tilt).hand
     c, r = np.asarray(obj.centroid_object, float), float(obj.max_radius)
     with ResultStore(bf_store, readonly=True) as store:
         drawn = compare.draw_fc(store, "washer", DESIGN, s, 4, 0)

@@ -8,9 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from app.cli import main, parse_angle_list
+from app.cli import main
+from app.cli.flags import parse_angle_list
 from app.errors import SettingsError
-from app.objects import OBJECT_KEYS
+from app.model.objects import OBJECT_KEYS
 
 FORMS = r"comma list .*start:stop:step"
 
@@ -123,6 +124,7 @@ def test_sweep_bad_range(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> 
     assert not (tmp_path / "out").exists()  # rejected before anything is written
 
 
+@pytest.mark.ray
 def test_sweep_unreachable_ray_cluster(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     pytest.importorskip("ray", reason="Ray is not installed: pip install 'handbench[ray]'")
     code, _, err = _run(capsys, *_ray_sweep(tmp_path), "--address", "127.0.0.1:1")

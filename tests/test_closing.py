@@ -7,32 +7,16 @@ import dataclasses
 import fcl
 import numpy as np
 import pytest
-from analytic_objects import AnalyticCylinder
 
-from app.closing import ClosingStats, Obstacles, close_finger, fcl_transform, pair_distance
-from app.closing_naive import close_finger_naive
-from app.closing_settings import ClosingSettings
-from app.contacts import ContactSettings
 from app.errors import SettingsError
-from app.hand.model import build_hand
-from app.hypotheses import make_hypotheses
-from app.settings import SimSettings
-from app.simulate import HandKit, simulate_base, simulate_thumb
-
-
-def can_hypotheses(target=(37.5, 0, 125.0), normal=(1.0, 0, 0), hint=(0, 1.0, 0), n_rays=28):
-    return make_hypotheses(
-        "can",
-        np.array(target),
-        np.array(normal),
-        np.array(hint),
-        np.array([0.41, 0, 0.91]),
-        0.2,
-        n_rays,
-        [0.0],
-        (-20, -50),
-        15,
-    )
+from app.model.hand.model import build_hand
+from app.quality.settings import SimSettings
+from app.sim.closing import ClosingStats, Obstacles, close_finger, fcl_transform, pair_distance
+from app.sim.closing_naive import close_finger_naive
+from app.sim.closing_settings import ClosingSettings
+from app.sim.contacts import ContactSettings
+from app.sim.simulate import HandKit, simulate_base, simulate_thumb
+from tests.utils import AnalyticCylinder, can_hypotheses
 
 
 def link_distances(kit: HandKit, grasp, obj) -> np.ndarray:
@@ -230,21 +214,3 @@ def test_settings_validation_lists_choices() -> None:
         ClosingSettings(mode="wiggle")  # type: ignore[arg-type]
     with pytest.raises(SettingsError, match="stop_tol_mm"):
         ClosingSettings(stop_tol_mm=0)
-
-
-@pytest.mark.parametrize("cmc", [0.0, 30.0])
-def test_thumb_cmc_stage_shared_across_mcp_designs_changes_nothing(cmc: float) -> None:
-    """With MCP and IP open the thumb's capsules lie on the metacarpal's line, so the CMC
-    stage is the same for every MCP design angle: a base shared by designs (its memo of the
-    CMC stage reused) gives the grasps each design gets on a fresh base."""
-    obj, hyps = AnalyticCylinder(), can_hypotheses()
-    s = SimSettings()
-    kits = [HandKit(build_hand(cmc, m)) for m in (0.0, 45.0, 90.0)]
-    for i in (0, 140, 305):
-        shared = simulate_base(kits[0], obj, hyps, i, s)
-        for kit in kits:
-            fresh = simulate_thumb(kit, obj, simulate_base(kit, obj, hyps, i, s), s)
-            reused = simulate_thumb(kit, obj, shared, s)
-            assert np.allclose(fresh.q, reused.q, atol=1e-9), (cmc, i)
-            assert fresh.events == reused.events
-        assert "thumb" in shared.thumb_first_stage  # the memo was used

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.contacts import _samples, near_surface
-from app.hand.model import build_hand
-from app.objects import load_object
+from app.model.hand.model import build_hand
+from app.model.objects import load_object
+from app.sim.contacts import _samples, near_surface
 
 
 @pytest.mark.parametrize("key", ["power_drill", "plastic_pear", "washer", "chips_can"])

@@ -35,7 +35,7 @@ def test_map_image_and_table() -> None:
 
     from app.explorer.map_data import TOTAL, MapPoint, metric_value
     from app.explorer.panel_map import render_map, table_markdown
-    from app.scores import DesignScore, ObjectScore
+    from app.quality.scores import DesignScore, ObjectScore
 
     pts = [
         MapPoint(c, m, DesignScore({"a": ObjectScore(100, int(c + m), 10)}, {"a": "CG"}))
@@ -51,8 +51,8 @@ def test_map_image_and_table() -> None:
 
 
 def test_score_table_partial() -> None:
-    from app.design import ThumbDesign
-    from app.explorer.panel_score import ScoreSnapshot, snapshot_markdown
+    from app.explorer.live_score import ScoreSnapshot, snapshot_markdown
+    from app.model.design import ThumbDesign
 
     s = ScoreSnapshot(
         ThumbDesign(15, 60),
@@ -110,9 +110,9 @@ class _FakeStore:
 def _write_reference(path, objects, settings_key: str, rows) -> None:  # noqa: ANN001
     import json
 
-    from app.hand.data import load_hand_dims
-    from app.report import write_table_csv
-    from app.sweep import cached_hypotheses
+    from app.model.hand.data import load_hand_dims
+    from app.reports.report import write_table_csv
+    from app.sim.hypothesis_sets import cached_hypotheses
 
     write_table_csv(rows, path / "table.csv", objects)
     meta = {
@@ -128,15 +128,16 @@ def _write_reference(path, objects, settings_key: str, rows) -> None:  # noqa: A
 def test_reference_layer(tmp_path) -> None:  # noqa: ANN001
     from typing import cast
 
-    from app.design import ThumbDesign
+    from app.explorer.live_score import read_snapshot, snapshot_markdown
     from app.explorer.map_data import TOTAL, map_points
     from app.explorer.panel_map import render_map, table_markdown
-    from app.explorer.panel_score import read_snapshot, snapshot_markdown
-    from app.objects import load_object
-    from app.scores import DesignScore, ObjectScore
-    from app.settings import SimSettings
-    from app.store import ResultStore
-    from app.sweep import cached_hypotheses, design_key, object_key
+    from app.model.design import ThumbDesign
+    from app.model.objects import load_object
+    from app.quality.scores import DesignScore, ObjectScore
+    from app.quality.settings import SimSettings
+    from app.runs.keys import design_key, object_key
+    from app.runs.store import ResultStore
+    from app.sim.hypothesis_sets import cached_hypotheses
 
     objs = ("chips_can",)
     n = len(cached_hypotheses("chips_can"))

@@ -1,4 +1,4 @@
-"""Force closure and ε (app.force_closure) against physics and an independent LP/QP."""
+"""Force closure and ε (app.quality.force_closure) against physics and an independent LP/QP."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
 
-from app.contact_set import ContactSet
 from app.errors import SettingsError
-from app.force_closure import (
+from app.model.contact_set import ContactSet
+from app.quality.force_closure import (
     FCSettings,
     epsilon_quality,
     evaluate_fc,
@@ -20,7 +20,7 @@ from app.force_closure import (
     positively_spans,
     primitive_wrenches,
 )
-from app.force_closure_lp import distance_to_hull, is_force_closure_lp, lp_margin, support
+from app.quality.force_closure_lp import distance_to_hull, is_force_closure_lp, lp_margin, support
 
 R_SPHERE = 20.0
 

@@ -9,27 +9,28 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from app.contact_set import ContactSet
-from app.force_closure import fc_and_epsilon, primitive_wrenches
-from app.force_closure_lp import distance_to_hull
-from app.gqm import GQM_NAMES, GQM_VERSION, GQMSettings, compute_gqms
-from app.gqm.a1 import q_a1
-from app.gqm.a2 import q_a2
-from app.gqm.a3 import q_a3
-from app.gqm.b1 import q_b1
-from app.gqm.b2 import q_b2
-from app.gqm.b3 import q_b3
-from app.gqm.c1 import q_c1
-from app.gqm.c2 import q_c2
-from app.gqm.contacts import link_contacts
-from app.gqm.d1 import q_d1
-from app.gqm.d2 import hand_object_jacobian, q_d2
-from app.gqm.epsilon import TOL_REL, grown_epsilon
-from app.gqm.grasp_matrix import grasp_matrix, grasp_singular_values
-from app.gqm.hand_jacobian import hand_jacobian
-from app.gqm.wrench_space import grasp_wrench_space, wrench_hull
-from app.hand.model import build_hand
-from app.hypotheses import rotation_about
+from app.model.contact_set import ContactSet
+from app.model.hand.model import Hand, build_hand
+from app.quality.force_closure import fc_and_epsilon, primitive_wrenches
+from app.quality.force_closure_lp import distance_to_hull
+from app.quality.gqm import GQM_NAMES, GQM_VERSION, GQMSettings, compute_gqms
+from app.quality.gqm.a1 import q_a1
+from app.quality.gqm.a2 import q_a2
+from app.quality.gqm.a3 import q_a3
+from app.quality.gqm.b1 import q_b1
+from app.quality.gqm.b2 import q_b2
+from app.quality.gqm.b3 import q_b3
+from app.quality.gqm.c1 import q_c1
+from app.quality.gqm.c2 import q_c2
+from app.quality.gqm.contacts import link_contacts
+from app.quality.gqm.d1 import q_d1
+from app.quality.gqm.d2 import hand_object_jacobian, q_d2
+from app.quality.gqm.epsilon import TOL_REL, grown_epsilon
+from app.quality.gqm.grasp_matrix import grasp_matrix, grasp_singular_values
+from app.quality.gqm.hand_jacobian import hand_jacobian
+from app.quality.gqm.wrench_space import grasp_wrench_space, wrench_hull
+from app.sim.hypotheses import rotation_about
+from tests.utils import Body
 
 R_OBJ = 30.0
 
@@ -144,7 +145,7 @@ def test_q_d1_posture() -> None:
     assert q_d1(np.array([0.5, 0, 0, 0]), lo, hi, [0]) == pytest.approx(1.0)  # joint subset
 
 
-def _grasp_on_hand(seed: int) -> tuple[object, SimpleNamespace, np.ndarray]:
+def _grasp_on_hand(seed: int) -> tuple[Hand, SimpleNamespace, np.ndarray]:
     """A hand at a random mid posture, contacts on 5 links, posed by a random T."""
     hand = build_hand(15, 60)
     rng = np.random.default_rng(seed)
@@ -216,7 +217,7 @@ def test_q_d2_frame_invariant_and_bounded() -> None:
 # ----------------------------------------------------------------------------- all ten
 def test_compute_gqms_keys_and_link_model() -> None:
     hand, g, _ = _grasp_on_hand(6)
-    obj = SimpleNamespace(centroid_object=np.mean(g.contacts.p_object, axis=0), max_radius=80.0)
+    obj = Body(centroid_object=np.mean(g.contacts.p_object, axis=0), max_radius=80.0)
     vals = compute_gqms(g, obj, hand)  # type: ignore[arg-type]
     assert tuple(vals) == GQM_NAMES and all(np.isfinite(v) for v in vals.values())
     for k in ("Q_A3", "Q_B1", "Q_B3", "Q_D1", "Q_D2"):
@@ -405,7 +406,7 @@ def test_grown_epsilon_equals_full_hull() -> None:
 
 
 def test_sub_hull_facets_nearer_than_epsilon_are_cut() -> None:
-    """The exactness argument of ``app.gqm.epsilon``: for a subset S ⊆ W, ε(S) ≤ ε(W), and
+    """The exactness argument of ``app.quality.gqm.epsilon``: for a subset S ⊆ W, ε(S) ≤ ε(W), and
     every facet of conv(S) nearer than ε(W) has a wrench of W beyond it, so a nearest facet
     of conv(S) with none beyond is at ε(W) exactly."""
     from scipy.spatial import ConvexHull
@@ -435,7 +436,7 @@ def test_sub_hull_facets_nearer_than_epsilon_are_cut() -> None:
     assert cut > 0 and supported > 0  # both branches of the argument were exercised
 
 
-def patch_grasp() -> tuple[object, SimpleNamespace, SimpleNamespace]:
+def patch_grasp() -> tuple[Hand, SimpleNamespace, Body]:
     """A force-closure grasp of a sphere (r = R_OBJ) by five links, six points per patch."""
     hand, g, _ = _grasp_on_hand(7)
     links = ["palm", "thumb_distal", "index_distal", "middle_middle", "ring_proximal"]
@@ -448,7 +449,7 @@ def patch_grasp() -> tuple[object, SimpleNamespace, SimpleNamespace]:
         link += [name] * 6
     P = np.concatenate(p)
     cs = ContactSet(P, -P / R_OBJ, np.array(link, dtype=object), np.ones(len(P), bool))
-    obj = SimpleNamespace(centroid_object=np.zeros(3), max_radius=R_OBJ)
+    obj = Body(centroid_object=np.zeros(3), max_radius=R_OBJ)
     return hand, SimpleNamespace(q=g.q, T_object_palm=g.T_object_palm, contacts=cs), obj
 
 

@@ -1,13 +1,13 @@
-"""Grasp-type correctness (app.grasp_type) on hand-built contact sets."""
+"""Grasp-type correctness (app.quality.grasp_type) on hand-built contact sets."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from app.contact_set import ContactSet
 from app.errors import SettingsError
-from app.grasp_type import (
+from app.model.contact_set import ContactSet
+from app.quality.grasp_type import (
     GraspTypeSettings,
     Verdict,
     check_cg,

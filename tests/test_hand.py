@@ -7,12 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from app.design import ThumbDesign, published_designs
 from app.errors import DesignError
-from app.hand.chains import finger_chains
-from app.hand.data import load_hand_dims
-from app.hand.geometry import CapsuleShape
-from app.hand.model import FINGER_JOINTS, FINGER_LINKS, build_hand
+from app.model.design import ThumbDesign, published_designs
+from app.model.hand.chains import finger_chains
+from app.model.hand.data import load_hand_dims
+from app.model.hand.geometry import CapsuleShape
+from app.model.hand.model import FINGER_JOINTS, FINGER_LINKS, build_hand
 
 RNG = np.random.default_rng(7)
 

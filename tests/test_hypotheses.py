@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from app.errors import UnknownHypothesisError
-from app.hypotheses import cone_rays, make_hypotheses, palm_orientation
-from app.objects import OBJECT_KEYS, load_object
-from app.sweep import cached_hypotheses
+from app.model.objects import OBJECT_KEYS, load_object
+from app.sim.hypotheses import cone_rays, make_hypotheses, palm_orientation
+from app.sim.hypothesis_sets import cached_hypotheses
 
 N_GH = {
     "small_marker": 1026,

@@ -1,4 +1,4 @@
-"""Tests of app.objects: data files, meshes, SDF, FCL pieces, import of user meshes."""
+"""Tests of app.model.objects: data files, meshes, SDF, FCL pieces, import of user meshes."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 import trimesh
 
 from app.errors import MeshImportError, UnknownObjectError
-from app.objects import (
+from app.model.objects import (
     OBJECT_KEYS,
     GraspObject,
     available_keys,

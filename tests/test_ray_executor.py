@@ -12,13 +12,15 @@ from collections.abc import Iterator
 import pytest
 
 ray = pytest.importorskip("ray", reason="Ray is not installed: pip install 'handbench[ray]'")
+pytestmark = pytest.mark.ray
 
-from app.design import ThumbDesign  # noqa: E402
 from app.errors import HandbenchError, SettingsError  # noqa: E402
-from app.ray_executor import RayExecutor  # noqa: E402
-from app.settings import SimSettings  # noqa: E402
-from app.store import GraspOutcome  # noqa: E402
-from app.sweep import InlineExecutor, Task  # noqa: E402
+from app.model.design import ThumbDesign  # noqa: E402
+from app.quality.outcome import GraspOutcome  # noqa: E402
+from app.quality.settings import SimSettings  # noqa: E402
+from app.runs.executors import InlineExecutor  # noqa: E402
+from app.runs.ray_executor import RayExecutor  # noqa: E402
+from app.runs.tasks import Task  # noqa: E402
 
 DESIGNS = (ThumbDesign(0.0, 45.0), ThumbDesign(30.0, 60.0))
 OBJECT = "washer"  # the cheapest object to close on (about 0.1 s per grasp)

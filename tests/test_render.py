@@ -2,26 +2,23 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import matplotlib.image as mpimg
 import numpy as np
 import pytest
 
-from app.contact_set import ContactSet
-from app.hand.model import build_hand
-from app.objects import load_object
-from app.render import (
-    CONTACT_RGB,
+from app.model.contact_set import ContactSet
+from app.model.hand.model import build_hand
+from app.model.objects import load_object
+from app.reports.pictures import (
     grid_pose,
     render_design_grid,
     render_hand,
     render_object,
-    render_scene,
     roll0_pose,
 )
+from app.reports.scene import CONTACT_RGB, render_scene
 
 SIZE = (360, 280)
 
@@ -130,13 +127,3 @@ def test_design_grid(tmp_path: Path) -> None:
     info = render_design_grid(out, designs=[(0, 0), (45, 90)], size=(600, 320))
     assert _rgb(out).shape[:2] == (320, 600)
     assert info.n_polygons > 2000
-
-
-def test_core_does_not_import_matplotlib() -> None:
-    code = (
-        "import sys, app.hand.model, app.objects, app.hypotheses, app.contact_set;"
-        "sys.exit(1 if 'matplotlib' in sys.modules else 0)"
-    )
-    root = Path(__file__).resolve().parents[1]
-    r = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr or "matplotlib imported by the core"

@@ -1,4 +1,4 @@
-"""S_GAS scores (app.scores) on small hand-computed examples."""
+"""S_GAS scores (app.quality.scores) on small hand-computed examples."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from app.errors import SettingsError
-from app.scores import DesignScore, ObjectScore, score_object
+from app.quality.scores import DesignScore, ObjectScore, score_object
 
 TYPES = {"small_marker": "PP", "washer": "PP", "chips_can": "CG", "coffee_can": "CG"}
 

@@ -14,41 +14,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.contact_set import LINK_NAMES, ContactSet
 from app.errors import StoreError
-from app.store import (
-    SCHEMA_VERSION,
-    GraspOutcome,
-    ResultStore,
-    default_store_path,
-    stable_hash,
-)
+from app.hashing import stable_hash
+from app.model.contact_set import ContactSet
+from app.quality.outcome import GraspOutcome
+from app.runs.store import SCHEMA_VERSION, ResultStore, default_store_path
+from tests.utils import make_outcome
 
 ROOT = Path(__file__).resolve().parents[1]
 KEYS = ("design0", "object0", "settings0")
-
-
-def make_outcome(seed: int, k: int | None = None, dtype: type = np.float64) -> GraspOutcome:
-    """A deterministic outcome with ``k`` contacts (random k when None)."""
-    rng = np.random.default_rng(seed)
-    k = int(rng.integers(0, 12)) if k is None else k
-    link = np.empty((k,), dtype=object)
-    link[:] = [LINK_NAMES[int(i)] for i in rng.integers(0, len(LINK_NAMES), k)]
-    fc = bool(rng.random() < 0.6)
-    return GraspOutcome(
-        q_final_rad=rng.normal(size=15),
-        contacts=ContactSet(
-            rng.normal(size=(k, 3)).astype(dtype) * 50,
-            rng.normal(size=(k, 3)).astype(dtype),
-            link,
-            rng.random(k) < 0.5,
-        ),
-        is_fc=fc,
-        is_correct=fc and bool(rng.random() < 0.5),
-        epsilon=float(rng.random()) if fc else 0.0,
-        reasons=() if fc else ("not force closure", "no palmar contact on the thumb"),
-        n_queries=int(rng.integers(0, 5000)),
-    )
 
 
 # ----------------------------------------------------------------------------- hashing
@@ -153,8 +127,8 @@ def test_transaction_is_atomic(tmp_path: Path) -> None:
 WRITER = """
 import sys, time
 sys.path.insert(0, sys.argv[5])
-from app.store import ResultStore
-from test_store import make_outcome
+from app.runs.store import ResultStore
+from tests.utils import make_outcome
 path, batch, n_batches, delay = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4])
 with ResultStore(path) as store:
     have = store.present_ids("design0", "object0", "settings0")
@@ -170,7 +144,7 @@ with ResultStore(path) as store:
 
 READER = """
 import sys
-from app.store import ResultStore
+from app.runs.store import ResultStore
 path, batch, seconds = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
 import time
 t_end, last, n = time.monotonic() + seconds, 0, 0
@@ -191,7 +165,7 @@ def _env() -> dict[str, str]:
 
 
 def _writer(path: Path, batch: int, n_batches: int, delay: float) -> subprocess.Popen[str]:
-    args = [str(path), str(batch), str(n_batches), str(delay), str(Path(__file__).parent)]
+    args = [str(path), str(batch), str(n_batches), str(delay), str(ROOT)]
     return subprocess.Popen(
         [sys.executable, "-c", WRITER, *args],
         cwd=ROOT,
@@ -201,6 +175,7 @@ def _writer(path: Path, batch: int, n_batches: int, delay: float) -> subprocess.
     )
 
 
+@pytest.mark.subprocess
 def test_kill_9_then_resume(tmp_path: Path) -> None:
     path, batch, n_batches = tmp_path / "r.sqlite", 40, 150
     for stop_after in (5, 17, 60):
@@ -231,6 +206,7 @@ def test_kill_9_then_resume(tmp_path: Path) -> None:
         assert raw.execute("SELECT COUNT(*) FROM outcomes").fetchone()[0] == len(expected)
 
 
+@pytest.mark.subprocess
 def test_concurrent_readers_while_writing(tmp_path: Path) -> None:
     path, batch = tmp_path / "r.sqlite", 25
     ResultStore(path).close()  # schema exists before the race

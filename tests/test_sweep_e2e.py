@@ -13,10 +13,11 @@ from pathlib import Path
 import pytest
 
 from app.cli import main
-from app.design import ThumbDesign
-from app.settings import SimSettings
-from app.store import ResultStore
-from app.sweep import cached_hypotheses, design_key, object_key
+from app.model.design import ThumbDesign
+from app.quality.settings import SimSettings
+from app.runs.keys import design_key, object_key
+from app.runs.store import ResultStore
+from app.sim.hypothesis_sets import cached_hypotheses
 
 ARGS = [
     "--cmc",
@@ -73,6 +74,8 @@ def test_small_sweep_writes_tables_and_plots(tmp_path: Path, capsys) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.subprocess
+@pytest.mark.pool
 def test_kill_minus_nine_then_resume_gives_the_same_table(tmp_path: Path) -> None:
     run_cli(tmp_path, "ref", "ref.sqlite")
     store = tmp_path / "killed.sqlite"

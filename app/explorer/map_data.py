@@ -8,11 +8,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from app.explorer.reference import reference_scores
-from app.objects import load_object
-from app.scores import DesignScore, ObjectScore
-from app.settings import SimSettings
-from app.store import ResultStore
-from app.sweep import cached_hypotheses, object_key
+from app.model.objects import load_object
+from app.quality.scores import DesignScore, ObjectScore
+from app.quality.settings import SimSettings
+from app.runs.keys import object_key
+from app.runs.store import ResultStore
+from app.sim.hypothesis_sets import cached_hypotheses
 
 TOTAL = "total S_GAS"
 PP = "PP S_GAS"

@@ -8,7 +8,7 @@ from collections.abc import Callable
 import viser
 
 from app.config_docs import field_docs
-from app.design import BASELINE, CMC_RANGE_DEG, MCP_RANGE_DEG, ThumbDesign, published_designs
+from app.model.design import BASELINE, CMC_RANGE_DEG, MCP_RANGE_DEG, ThumbDesign, published_designs
 
 CUSTOM = "(custom)"
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import viser
 
 from app.errors import HandbenchError
-from app.objects import MESH_EXTENSIONS, OBJECT_KEYS, import_object
+from app.model.objects import MESH_EXTENSIONS, OBJECT_KEYS, import_object
 
 
 class ImportPanel:

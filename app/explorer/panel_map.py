@@ -17,8 +17,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import viser  # noqa: E402
 
-from app.design import CMC_RANGE_DEG, MCP_RANGE_DEG  # noqa: E402
-from app.design_map import interpolate_map  # noqa: E402
 from app.explorer.map_data import (  # noqa: E402
     TOTAL,
     MapPoint,
@@ -27,8 +25,10 @@ from app.explorer.map_data import (  # noqa: E402
     metric_value,
 )
 from app.explorer.reference import SOURCE_LABEL  # noqa: E402
-from app.settings import SimSettings  # noqa: E402
-from app.store import ResultStore  # noqa: E402
+from app.model.design import CMC_RANGE_DEG, MCP_RANGE_DEG  # noqa: E402
+from app.quality.settings import SimSettings  # noqa: E402
+from app.reports.design_map import interpolate_map  # noqa: E402
+from app.runs.store import ResultStore  # noqa: E402
 
 PICK_NONE: str = "(pick a computed design)"
 

@@ -8,10 +8,10 @@ from collections.abc import Callable, Mapping
 import numpy as np
 import viser
 
-from app.closing_settings import CLOSING_MODES
 from app.explorer.scene_object import CONTACT_COLORS
-from app.hypotheses import Hypotheses
-from app.store import GraspOutcome
+from app.quality.outcome import GraspOutcome
+from app.sim.closing_settings import CLOSING_MODES
+from app.sim.hypotheses import Hypotheses
 
 ALL: str = "all"
 OUTCOME_FILTERS = (ALL, "FC", "correct", "FC not correct", "failed (not FC)")

@@ -5,14 +5,11 @@ from __future__ import annotations
 import io
 import socket
 import threading
-import time
-from typing import TYPE_CHECKING
+from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import viser
-
-if TYPE_CHECKING:
-    from app.explorer.session import Session
 
 SHARE_TIMEOUT_S = 10.0
 RENDER_SIZE = (900, 1400)  # (height, width)
@@ -61,10 +58,30 @@ def request_share_url(server: viser.ViserServer, timeout_s: float = SHARE_TIMEOU
 
 
 class SharePanel:
-    """'Save PNG', the link of the current state, 'Public share URL'."""
+    """'Save PNG', the link of the current state, 'Public share URL'.
 
-    def __init__(self, gui: viser.GuiApi, session: Session) -> None:
-        self.session = session
+    Like the other panels it knows nothing of the session: the session hands it callbacks.
+    """
+
+    def __init__(
+        self,
+        gui: viser.GuiApi,
+        *,
+        state_link: Callable[[], str],
+        render: Callable[[int, int], np.ndarray],
+        shot_name: Callable[[], str],
+        shots_dir: Path,
+        download: Callable[[str, bytes], None],
+        share_url: Callable[[], str | None],
+        port: Callable[[], int],
+    ) -> None:
+        self._state_link = state_link
+        self._render = render
+        self._shot_name = shot_name
+        self._shots_dir = shots_dir
+        self._download = download
+        self._share_url = share_url
+        self._port = port
         self.save = gui.add_button("Save PNG of the view", icon=viser.Icon.CAMERA)
         self.saved = gui.add_markdown("")
         self.link = gui.add_markdown("")
@@ -75,36 +92,32 @@ class SharePanel:
 
     def update_link(self) -> None:
         """Show the link that reopens the current design, object and GH."""
-        url = self.session.ctx.url_base + "/" + self.session.state_query()
+        url = self._state_link()
         self.link.content = f"Link to this state:  \n[{url}]({url})"
 
     def _save(self) -> None:
-        s = self.session
         self.saved.content = "rendering…"
         h, w = RENDER_SIZE
         try:
-            img = s.client.get_render(h, w, transport_format="png", timeout=30.0)
+            img = self._render(h, w)
         except (TimeoutError, RuntimeError) as e:
             self.saved.content = f"could not render: {e}"
             return
         data = png_bytes(img)
-        d = s.design
-        stamp = time.strftime("%Y%m%d-%H%M%S")
-        name = f"handbench_c{d.cmc_deg:g}_m{d.mcp_deg:g}_{s.object_key}_gh{s.gh}_{stamp}.png"
-        s.ctx.shots_dir.mkdir(parents=True, exist_ok=True)
-        path = s.ctx.shots_dir / name
+        name = self._shot_name()
+        self._shots_dir.mkdir(parents=True, exist_ok=True)
+        path = self._shots_dir / name
         path.write_bytes(data)
-        s.client.send_file_download(name, data)
+        self._download(name, data)
         self.saved.content = f"saved `{path}` (and sent as a download)"
 
     def _share(self) -> None:
         self.share_md.content = "asking viser's share server…"
-        url = request_share_url(self.session.ctx.server)
-        port = self.session.ctx.server.get_port()
+        url = self._share_url()
         if url:
             self.share_md.content = f"Public URL (24 h): [{url}]({url})"
         else:
             self.share_md.content = (
                 "No public share URL (offline, or the share server did not answer in "
-                f"{SHARE_TIMEOUT_S:g} s).  \n" + lan_hint(port)
+                f"{SHARE_TIMEOUT_S:g} s).  \n" + lan_hint(self._port())
             )

@@ -19,11 +19,11 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
-from app.hand.data import load_hand_dims
-from app.objects import load_object
-from app.scores import DesignScore, ObjectScore
-from app.settings import SimSettings
-from app.sweep import cached_hypotheses
+from app.model.hand.data import load_hand_dims
+from app.model.objects import load_object
+from app.quality.scores import DesignScore, ObjectScore
+from app.quality.settings import SimSettings
+from app.sim.hypothesis_sets import cached_hypotheses
 
 DEFAULT_REFERENCE_DIR = Path(__file__).resolve().parents[2] / "docs" / "results"
 """``docs/results`` of the repository."""

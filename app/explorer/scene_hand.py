@@ -6,7 +6,7 @@ import numpy as np
 import viser
 
 from app.explorer.units import MM, pose_to_scene, to_scene
-from app.hand.model import Hand
+from app.model.hand.model import Hand
 
 HAND_COLOR = (214, 186, 160)
 THUMB_COLOR = (196, 160, 130)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import viser
 
-from app.contact_set import ContactSet
 from app.explorer.units import to_scene
-from app.hypotheses import Hypotheses
+from app.model.contact_set import ContactSet
+from app.sim.hypotheses import Hypotheses
 
 OBJECT_COLOR = (150, 170, 190)
 RAY_COLOR = (150, 150, 150)

@@ -15,9 +15,9 @@ from pathlib import Path
 import viser
 
 from app.explorer.session import ExplorerContext, Session
-from app.objects import OBJECT_KEYS, load_object
-from app.store import ResultStore, default_store_path
-from app.sweep import Executor, InlineExecutor, LocalExecutor
+from app.model.objects import OBJECT_KEYS, load_object
+from app.runs.executors import Executor, InlineExecutor, LocalExecutor
+from app.runs.store import ResultStore, default_store_path
 
 OBJECTS_ENV = "HANDBENCH_EXPLORER_OBJECTS"
 """Comma list of object keys for the S_GAS panel and the map (default: all six)."""

@@ -15,28 +15,32 @@ from pathlib import Path
 import numpy as np
 import viser
 
-from app.closing_settings import ClosingSettings
-from app.design import BASELINE, ThumbDesign
 from app.errors import HandbenchError
 from app.explorer import url_state
+from app.explorer.live_score import ScoreWorker
 from app.explorer.panel_design import DesignPanel
 from app.explorer.panel_import import ImportPanel
 from app.explorer.panel_map import MapPanel
 from app.explorer.panel_replay import ReplayPanel, outcome_markdown
-from app.explorer.panel_score import ScorePanel, ScoreWorker
-from app.explorer.panel_share import SharePanel
+from app.explorer.panel_score import ScorePanel
+from app.explorer.panel_share import SharePanel, request_share_url
 from app.explorer.scene_hand import HandView
 from app.explorer.scene_object import ObjectView
 from app.explorer.units import MM
-from app.hand.model import Hand, build_hand
-from app.hypotheses import Hypotheses
-from app.judge import judge
-from app.objects import available_keys, load_object
-from app.replay import Replay, replay
-from app.settings import SimSettings
-from app.simulate import HandKit
-from app.store import GraspOutcome, ResultStore
-from app.sweep import Executor, cached_hypotheses, design_key, object_key
+from app.model.design import BASELINE, ThumbDesign
+from app.model.hand.model import Hand, build_hand
+from app.model.objects import available_keys, load_object
+from app.quality.judge import judge
+from app.quality.outcome import GraspOutcome
+from app.quality.settings import SimSettings
+from app.runs.executors import Executor
+from app.runs.keys import design_key, object_key
+from app.runs.store import ResultStore
+from app.sim.closing_settings import ClosingSettings
+from app.sim.hypotheses import Hypotheses
+from app.sim.hypothesis_sets import cached_hypotheses
+from app.sim.replay import Replay, replay
+from app.sim.simulate import HandKit
 
 REPLAY_HZ = 30.0
 
@@ -150,7 +154,18 @@ class Session:
                 gui, self.ctx.store, self.ctx.objects, self._map_select, self.ctx.reference_dir
             )
         with tabs.add_tab("Share", viser.Icon.SHARE):
-            self.share_panel = SharePanel(gui, self)
+            self.share_panel = SharePanel(
+                gui,
+                state_link=lambda: self.ctx.url_base + "/" + self.state_query(),
+                render=lambda h, w: self.client.get_render(
+                    h, w, transport_format="png", timeout=30.0
+                ),
+                shot_name=self._shot_name,
+                shots_dir=self.ctx.shots_dir,
+                download=self.client.send_file_download,
+                share_url=lambda: request_share_url(self.ctx.server),
+                port=self.ctx.server.get_port,
+            )
 
     def _start(self) -> None:
         """Read the link state of this tab, draw the first scene, start the S_GAS worker."""
@@ -405,6 +420,12 @@ class Session:
         return url_state.UrlState(
             self.design.cmc_deg, self.design.mcp_deg, self.object_key, str(self.gh), tilt=tilt
         ).query()
+
+    def _shot_name(self) -> str:
+        """File name of a saved view: design, object, GH and time."""
+        d = self.design
+        stamp = time.strftime("%Y%m%d-%H%M%S")
+        return f"handbench_c{d.cmc_deg:g}_m{d.mcp_deg:g}_{self.object_key}_gh{self.gh}_{stamp}.png"
 
     # ------------------------------------------------------------------ teardown
     def close(self) -> None:

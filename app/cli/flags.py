@@ -1,0 +1,162 @@
+"""Flags built from the typed dataclasses (``ThumbDesign``, ``SimSettings``) and their field
+docstrings, and the readers that turn parsed flags into designs, objects, stores, executors.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import dataclasses
+import math
+from collections.abc import Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from app.model.design import ThumbDesign
+from typing import Any, get_args, get_origin, get_type_hints
+
+from app.config_docs import field_docs
+from app.errors import SettingsError
+from app.model.design import CMC_GRID_DEG, MCP_GRID_DEG, ThumbDesign
+
+
+def _add_dataclass_flags(parser: argparse.ArgumentParser, cls: type, group: str) -> None:
+    docs = field_docs(cls)
+    hints = get_type_hints(cls)
+    g = parser.add_argument_group(group)
+    for f in dataclasses.fields(cls):
+        t = hints[f.name]
+        flag = "--" + f.name.replace("_", "-")
+        default = f.default if f.default is not dataclasses.MISSING else None
+        helptext = f"{docs.get(f.name, '')} (default: {default})"
+        if get_origin(t) is tuple:
+            g.add_argument(
+                flag,
+                dest=f"{group}.{f.name}",
+                type=float,
+                nargs=len(get_args(t)),
+                default=None,
+                help=helptext,
+            )
+        elif get_args(t) and all(isinstance(a, str) for a in get_args(t)):  # Literal
+            g.add_argument(
+                flag, dest=f"{group}.{f.name}", choices=get_args(t), default=None, help=helptext
+            )
+        else:
+            g.add_argument(
+                flag,
+                dest=f"{group}.{f.name}",
+                type=t if t in (int, float) else str,
+                default=None,
+                help=helptext,
+            )
+
+
+def add_settings_flags(parser: argparse.ArgumentParser) -> None:
+    """Flags for every field of ``SimSettings`` (closing, contact, fc, grasp_type)."""
+    from app.quality.settings import SimSettings
+
+    for f in dataclasses.fields(SimSettings):
+        _add_dataclass_flags(parser, get_type_hints(SimSettings)[f.name], f.name)
+
+
+def settings_from_args(args: argparse.Namespace) -> Any:
+    """Build ``SimSettings`` from parsed flags (unset flags keep their defaults)."""
+    from app.quality.settings import SimSettings
+
+    parts: dict[str, Any] = {}
+    for f in dataclasses.fields(SimSettings):
+        cls = get_type_hints(SimSettings)[f.name]
+        kw = {}
+        for sf in dataclasses.fields(cls):
+            v = getattr(args, f"{f.name}.{sf.name}", None)
+            if v is not None:
+                kw[sf.name] = tuple(v) if isinstance(v, list) else v
+        parts[f.name] = cls(**kw)
+    return SimSettings(**parts)
+
+
+def add_design_flags(parser: argparse.ArgumentParser, required: bool = True) -> None:
+    """--cmc, --mcp (degrees) and --cmc-tilt from ``ThumbDesign``."""
+    docs = field_docs(ThumbDesign)
+    parser.add_argument(
+        "--cmc", type=float, required=required, metavar="DEG", help=docs["cmc_deg"] + " Range 0-45."
+    )
+    parser.add_argument(
+        "--mcp", type=float, required=required, metavar="DEG", help=docs["mcp_deg"] + " Range 0-90."
+    )
+    parser.add_argument(
+        "--cmc-tilt", choices=("ulnar", "radial"), default="ulnar", help=docs["cmc_tilt"]
+    )
+
+
+def parse_angle_list(text: str, name: str) -> list[float]:
+    """'0,15,30' or a range with a step 'start:stop:step' (stop included) -> degrees.
+
+    Range values are rounded to 1e-9° so that '0:0.3:0.1' gives exactly 0.3 (the same design
+    key as a typed 0.3)."""
+    forms = f"--{name} takes a comma list ('0,15,30') or start:stop:step ('0:45:5')"
+    try:
+        if ":" in text:
+            a, b, s = (float(x) for x in text.split(":"))
+            if not all(math.isfinite(x) for x in (a, b, s)) or s <= 0 or b < a:
+                raise ValueError
+            n = int(math.floor((b - a) / s + 1e-9))
+            vals = [round(a + k * s, 9) for k in range(n + 1)]
+        else:
+            vals = [float(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise SettingsError(f"{forms}, got {text!r}") from None
+    if not vals:
+        raise SettingsError(f"--{name} is empty; {forms}")
+    return vals
+
+
+def designs_from_args(args: argparse.Namespace) -> list[ThumbDesign]:
+    """Designs of --cmc × --mcp (default: the 28 published ones), CMC-major."""
+    cmcs = parse_angle_list(args.cmc, "cmc") if args.cmc else list(CMC_GRID_DEG)
+    mcps = parse_angle_list(args.mcp, "mcp") if args.mcp else list(MCP_GRID_DEG)
+    return [ThumbDesign(c, m) for c in cmcs for m in mcps]
+
+
+@contextlib.contextmanager
+def open_executor(args: argparse.Namespace) -> Iterator[Any]:
+    """The executor of --executor/--workers/--address, closed on exit."""
+    from app.runs.sweep import make_executor
+
+    ex = make_executor(args.executor, args.workers, args.address)
+    try:
+        yield ex
+    finally:
+        ex.close()
+
+
+def objects_from_args(names: list[str] | None) -> list[str]:
+    from app.model.objects import OBJECT_KEYS, load_object
+
+    if not names:
+        return list(OBJECT_KEYS)
+    for n in names:
+        load_object(n)  # UnknownObjectError lists the valid keys
+    return names
+
+
+def open_store(args: argparse.Namespace):  # noqa: ANN202
+    from app.runs.store import ResultStore, default_store_path
+
+    return ResultStore(Path(args.store) if args.store else default_store_path())
+
+
+def add_run_flags(s: argparse.ArgumentParser, workers_help: str) -> None:
+    """Flags of every command that simulates: workers, executor, store, and the settings."""
+    s.add_argument("--workers", type=int, default=None, help=workers_help)
+    s.add_argument(
+        "--executor",
+        choices=("local", "inline", "ray"),
+        default="local",
+        help="local process pool (default), inline, or a Ray cluster",
+    )
+    s.add_argument("--address", help="Ray cluster address (with --executor ray)")
+    s.add_argument("--store", help="results database (default ~/.cache/handbench/results.sqlite)")
+    add_settings_flags(s)

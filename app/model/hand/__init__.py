@@ -1,0 +1,1 @@
+"""The parametric hand: dimensions from ``hand_models/``, Pinocchio kinematics, link shapes."""

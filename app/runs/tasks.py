@@ -1,0 +1,108 @@
+"""The work unit of a run: one object, a chunk of its hypotheses, the designs lacking them.
+
+A worker computes each hypothesis' ``BaseGrasp`` once per CMC angle and then closes the
+thumb of every listed design on it (docs/cost-model.md).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+from app.model.design import ThumbDesign
+from app.model.objects import load_object
+from app.quality.judge import judge
+from app.quality.outcome import GraspOutcome
+from app.quality.settings import SimSettings
+from app.runs.keys import design_key, set_object_key
+from app.runs.store import ResultStore
+from app.sim.bruteforce import ALL_FINGERS, BruteForceHypotheses
+from app.sim.hypothesis_sets import hypotheses_of
+from app.sim.simulate import BaseGrasp, cached_kit, simulate_base, simulate_thumb
+
+#: Hypotheses per task: small enough for a live progress bar, large enough to amortise.
+DEFAULT_CHUNK = 60
+
+
+@dataclass(frozen=True)
+class Task:
+    """Hypotheses ``gh`` of ``object_name`` for the designs in ``designs``."""
+
+    object_name: str
+    """Object key, e.g. 'chips_can'."""
+    gh: tuple[int, ...]
+    """Hypothesis indices."""
+    designs: tuple[ThumbDesign, ...]
+    """Designs to evaluate on every listed hypothesis."""
+    settings: SimSettings
+    """Simulation settings."""
+    hypothesis_set: str = "anthropomorphic"
+    """One of ``HYPOTHESIS_SETS``."""
+
+
+def run_task(task: Task) -> list[tuple[int, str, GraspOutcome]]:
+    """Simulate one task; returns (design index in task, GH id, outcome) triples.
+
+    Brute-force sets close all fingers, and their outcomes keep the hand placement in
+    ``extra["T_object_palm"]`` (4×4 nested list, mm) for the GQMs and pictures.
+    """
+    obj = load_object(task.object_name)
+    hyps = hypotheses_of(task.object_name, task.hypothesis_set)
+    s = task.settings
+    kits = [cached_kit(*d.as_dict().values()) for d in task.designs]  # type: ignore[arg-type]
+    out: list[tuple[int, str, GraspOutcome]] = []
+    bf = isinstance(hyps, BruteForceHypotheses)
+    for i in task.gh:
+        # the open thumb (part of the approach) depends on the CMC angle only: one base
+        # stage per (CMC angle, tilt), shared by every MCP angle (docs/cost-model.md)
+        bases: dict[tuple[float, str], BaseGrasp] = {}
+        for di, (d, kit) in enumerate(zip(task.designs, kits, strict=True)):
+            open_thumb = (d.cmc_deg, d.cmc_tilt)
+            base = bases.get(open_thumb)
+            if base is None:
+                if isinstance(hyps, BruteForceHypotheses):
+                    base = simulate_base(kit, obj, hyps.approach_line(i), i, s, fingers=ALL_FINGERS)
+                else:
+                    base = simulate_base(kit, obj, hyps, i, s)
+                bases[open_thumb] = base
+            g = simulate_thumb(kit, obj, base, s)
+            o = judge(g, obj, s, base.queries + g.queries)
+            if bf:
+                o = replace(o, extra={**o.extra, "T_object_palm": g.T_object_palm.tolist()})
+            out.append((di, hyps.ids[i], o))
+    return out
+
+
+def plan_tasks(
+    store: ResultStore,
+    designs: Sequence[ThumbDesign],
+    object_names: Sequence[str],
+    settings: SimSettings,
+    chunk: int = DEFAULT_CHUNK,
+    gh_stride: int = 1,
+    hypothesis_set: str = "anthropomorphic",
+) -> list[Task]:
+    """Tasks for every (design, object, GH) not yet in the store (every ``gh_stride``-th GH).
+
+    ``hypothesis_set`` (one of ``HYPOTHESIS_SETS``) picks the hypotheses and the store's
+    object key (``hypotheses_of``/``set_object_key``); the default is the benchmark's.
+    """
+    skey = settings.key()
+    dkeys = [design_key(d) for d in designs]
+    tasks: list[Task] = []
+    for name in object_names:
+        hyps = hypotheses_of(name, hypothesis_set)
+        okey = set_object_key(name, hypothesis_set)
+        present = [store.present_ids(dk, okey, skey) for dk in dkeys]
+        subset = list(range(0, len(hyps), gh_stride))
+        for start in range(0, len(subset), chunk):
+            idx = subset[start : start + chunk]
+            # group designs by which of these GHs they lack (usually: all or none)
+            groups: dict[tuple[int, ...], list[ThumbDesign]] = {}
+            for d, have in zip(designs, present, strict=True):
+                missing = tuple(i for i in idx if hyps.ids[i] not in have)
+                if missing:
+                    groups.setdefault(missing, []).append(d)
+            for missing, ds in groups.items():
+                tasks.append(Task(name, missing, tuple(ds), settings, hypothesis_set))
+    return tasks

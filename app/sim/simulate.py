@@ -1,0 +1,261 @@
+"""Simulate grasp hypotheses: the design-independent base stage, then the thumb stage.
+
+Cost model (METHOD §3a; docs/cost-model.md): the approach stops at the first contact of
+the open hand, thumb included, and the open thumb's shape depends on the CMC angle c only
+(at q = 0 the MCP design angle m turns the thumb's capsules about their own axes). So the
+approach, the back-off and the long fingers' closing (``simulate_base``) run once per
+(hypothesis, c) and serve all MCP angles; the thumb closes last (``simulate_thumb``, per
+design), against the object and, for self-collision, the palm and the long fingers in their
+final posture.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Protocol
+
+import fcl
+import numpy as np
+
+from app.model.contact_set import LONG_FINGERS, ContactSet
+from app.model.design import ThumbDesign
+from app.model.hand.chains import FingerChain, finger_chains
+from app.model.hand.data import load_hand_dims
+from app.model.hand.model import Hand
+from app.model.target import GraspTarget
+from app.sim.closing import (
+    ClosingStats,
+    Obstacles,
+    StageEvent,
+    approach,
+    close_finger,
+    fcl_transform,
+)
+from app.sim.closing_settings import ClosingSettings
+from app.sim.contacts import ContactSettings, _reach, contacts_of_links, merge
+from app.sim.hypotheses import Hypotheses
+
+
+class PalmarRule(Protocol):
+    """The palmar-contact threshold (``GraspTypeSettings`` has it)."""
+
+    @property
+    def palmar_angle_deg(self) -> float:
+        """A contact is palmar when angle(n_contact, the link's n_palmar) is below this (°)."""
+        ...
+
+
+class SimulationSettings(Protocol):
+    """What simulating a grasp reads of the settings (``app.quality.settings.SimSettings``
+    satisfies it; the sim layer does not import the quality layer)."""
+
+    @property
+    def closing(self) -> ClosingSettings:
+        """Approach and closing (METHOD §4)."""
+        ...
+
+    @property
+    def contact(self) -> ContactSettings:
+        """Contact patches (METHOD §5)."""
+        ...
+
+    @property
+    def grasp_type(self) -> PalmarRule:
+        """The palmar classification of contacts."""
+        ...
+
+
+class HandKit:
+    """A hand's chains and its private FCL bodies (one kit per worker thread/process)."""
+
+    def __init__(self, hand: Hand) -> None:
+        self.hand = hand
+        self.chains: dict[str, FingerChain] = finger_chains(hand)
+        self.names = [lk.name for lk in hand.links]
+        self.shapes = [lk.shape for lk in hand.links]
+        self.T_link_fcl = np.stack([s.T_link_fcl() for s in self.shapes])
+        self.moving = [fcl.CollisionObject(s.fcl_geometry(), fcl.Transform()) for s in self.shapes]
+        self.static = [fcl.CollisionObject(s.fcl_geometry(), fcl.Transform()) for s in self.shapes]
+        self.q_open = hand.q_open
+        self.reach = np.array([_reach(sh) for sh in self.shapes])
+        T_open = hand.link_poses(self.q_open)
+        # approach bodies: every link of the open hand (the thumb too)
+        self.approach_idx = list(range(len(self.names)))
+        self.T_palm_approach = np.stack([T_open[i] @ self.T_link_fcl[i] for i in self.approach_idx])
+
+    def contacts(
+        self, obj: GraspTarget, T_links: np.ndarray, idx: list[int], settings: SimulationSettings
+    ) -> tuple[ContactSet, int]:
+        """Contacts of links ``idx`` posed at ``T_links`` (16, 4, 4) in the object frame, and
+        the FCL queries spent."""
+        counter = [0]
+        cs = contacts_of_links(
+            obj,
+            [self.names[j] for j in idx],
+            [self.shapes[j] for j in idx],
+            [self.moving[j] for j in idx],
+            T_links[idx],
+            self.T_link_fcl[idx],
+            settings.contact,
+            settings.grasp_type.palmar_angle_deg,
+            counter,
+        )
+        return cs, counter[0]
+
+    def bodies(self, finger: str) -> list[fcl.CollisionObject]:
+        """The moving FCL bodies of a finger's three links."""
+        return [self.moving[i] for i in self.chains[finger].link_indices]
+
+
+@dataclass(frozen=True)
+class BaseGrasp:
+    """The design-independent part of one hypothesis' grasp."""
+
+    approached: bool
+    """False when the approach line never brought the hand into contact (the GH fails)."""
+    T_object_palm: np.ndarray
+    """(4, 4) hand placement after approach and back-off."""
+    q: np.ndarray
+    """(15,) joint angles with the long fingers final and the thumb open, rad."""
+    contacts: ContactSet
+    """Contacts of the palm and the long fingers."""
+    queries: int
+    """FCL distance queries spent."""
+    thumb_first_stage: dict[str, tuple[np.ndarray, StageEvent]] = field(default_factory=dict)
+    """Memo of the thumb's CMC stage (sequential mode): with MCP and IP open, the thumb's
+    capsules lie on the metacarpal's line whatever the MCP design angle, so every design
+    sharing this base (same CMC angle) closes CMC identically (docs/cost-model.md)."""
+
+
+@dataclass(frozen=True)
+class Grasp:
+    """A hypothesis' final grasp at one thumb design."""
+
+    T_object_palm: np.ndarray
+    """(4, 4) hand placement, object frame."""
+    q: np.ndarray
+    """(15,) final joint angles, rad."""
+    contacts: ContactSet
+    """All contacts (palm, long fingers, thumb), object frame."""
+    thumb_n_main_object: np.ndarray
+    """(3,) the thumb distal phalanx long axis, object frame."""
+    approached: bool
+    """False when the approach failed (no contacts, not FC)."""
+    queries: int
+    """FCL distance queries of the thumb stage (the base stage counts its own)."""
+    events: tuple[str, ...] = ()
+    """Closing stage events of the thumb, for the explorer's replay and debugging."""
+
+
+def closing_fingers(grasp_type: str) -> tuple[str, ...]:
+    """Fingers that close: thumb + index for PP, all for CG (METHOD §3a)."""
+    return ("thumb", "index") if grasp_type == "PP" else ("thumb",) + LONG_FINGERS
+
+
+def simulate_base(
+    kit: HandKit,
+    obj: GraspTarget,
+    hyps: Hypotheses,
+    i: int,
+    settings: SimulationSettings,
+    stats: ClosingStats | None = None,
+    fingers: tuple[str, ...] | None = None,
+) -> BaseGrasp:
+    """Approach, back off by the standoff, close the long fingers; contacts of palm + fingers.
+
+    ``fingers``: the fingers that close (default ``closing_fingers`` of the object's grasp
+    type; the brute-force set closes all). The thumb, if listed, is left to ``simulate_thumb``.
+    """
+    closing = settings.closing
+    stats = stats if stats is not None else ClosingStats()
+    pieces = list(obj.collision_objects())
+    spec = obj.spec
+    centroid = obj.centroid_object
+    R = hyps.R_object_palm[i]
+    ray = hyps.ray_object[i]
+    start = float(np.linalg.norm(hyps.target_object - centroid)) + obj.max_radius
+    start += closing.approach_clearance_mm
+    s = approach(
+        [kit.moving[j] for j in kit.approach_idx],
+        kit.T_palm_approach,
+        R,
+        ray,
+        hyps.target_object,
+        kit.hand.approach_point_palm,
+        pieces,
+        start,
+        closing,
+        stats,
+    )
+    T = np.eye(4)
+    T[:3, :3] = R
+    q = kit.q_open.copy()
+    if s is None:
+        T[:3, 3] = hyps.target_object + start * ray - R @ kit.hand.approach_point_palm
+        return BaseGrasp(False, T, q, ContactSet(), stats.queries)
+    s += float(hyps.standoff_mm[i])
+    T[:3, 3] = hyps.target_object + s * ray - R @ kit.hand.approach_point_palm
+    obstacles = Obstacles(list(pieces), len(pieces))
+    for finger in fingers if fingers is not None else closing_fingers(spec.grasp_type):
+        if finger == "thumb":
+            continue
+        ch = kit.chains[finger]
+        q[list(ch.joints)] = close_finger(ch, kit.bodies(finger), T, obstacles, closing, stats)
+    T_links = T @ kit.hand.link_poses(q)
+    idx = [j for j, n in enumerate(kit.names) if not n.startswith("thumb")]
+    cs, n_q = kit.contacts(obj, T_links, idx, settings)
+    return BaseGrasp(True, T, q, cs, stats.queries + n_q)
+
+
+def simulate_thumb(
+    kit: HandKit,
+    obj: GraspTarget,
+    base: BaseGrasp,
+    settings: SimulationSettings,
+    stats: ClosingStats | None = None,
+) -> Grasp:
+    """Close the thumb of ``kit``'s design on a base grasp; all contacts of the final grasp."""
+    q = base.q.copy()
+    T = base.T_object_palm
+    thumb = kit.chains["thumb"]
+    if not base.approached:
+        n_main = (T @ kit.hand.link_poses(q)[thumb.link_indices[2]])[:3, 1]
+        return Grasp(T, q, base.contacts, n_main, False, 0)
+    closing = settings.closing
+    stats = stats if stats is not None else ClosingStats()
+    pieces = list(obj.collision_objects())
+    # self-collision bodies: palm and long-finger links, posed at the base posture
+    T_links = T @ kit.hand.link_poses(q)
+    others = [j for j, n in enumerate(kit.names) if not n.startswith("thumb")]
+    for j in others:
+        kit.static[j].setTransform(fcl_transform(T_links[j] @ kit.T_link_fcl[j]))
+    objs = pieces + [kit.static[j] for j in others]
+    mask = np.ones((3, len(objs)), bool)
+    mask[0, len(pieces)] = False  # the metacarpal sits in the thenar: never against the palm
+    spheres = np.full((len(objs), 4), np.inf)
+    for n, j in enumerate(others):
+        spheres[len(pieces) + n, :3] = (T_links[j] @ kit.T_link_fcl[j])[:3, 3]
+        spheres[len(pieces) + n, 3] = kit.reach[j]
+    obstacles = Obstacles(objs, len(pieces), mask, spheres)
+    q[list(thumb.joints)] = close_finger(
+        thumb, kit.bodies("thumb"), T, obstacles, closing, stats, base.thumb_first_stage
+    )
+    T_links = T @ kit.hand.link_poses(q)
+    idx = list(thumb.link_indices)
+    cs, n_q = kit.contacts(obj, T_links, idx, settings)
+    return Grasp(
+        T,
+        q,
+        merge(base.contacts, cs),
+        T_links[idx[2]][:3, 1].copy(),
+        True,
+        stats.queries + n_q,
+        tuple(stats.events),
+    )
+
+
+@lru_cache(maxsize=64)
+def cached_kit(cmc_deg: float, mcp_deg: float, tilt: str) -> HandKit:
+    """The simulation kit of a design (per process; the hand file is the default one)."""
+    return HandKit(Hand(ThumbDesign(cmc_deg, mcp_deg, tilt), load_hand_dims()))  # type: ignore[arg-type]
