@@ -2,12 +2,24 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
+from app.model.design import ThumbDesign
 from app.model.hand.model import build_hand
 from app.quality.settings import SimSettings
-from app.sim.simulate import HandKit, cached_kit, closing_fingers, simulate_base, simulate_thumb
+from app.runs.tasks import Task, run_task
+from app.sim.simulate import (
+    BASE_MCP_DEG,
+    HandKit,
+    base_kit,
+    cached_kit,
+    closing_fingers,
+    simulate_base,
+    simulate_thumb,
+)
 from tests.utils import AnalyticCylinder, can_hypotheses
 
 
@@ -65,3 +77,24 @@ def test_thumb_cmc_stage_shared_across_mcp_designs_changes_nothing(cmc: float) -
             assert np.allclose(fresh.q, reused.q, atol=1e-9), (cmc, i)
             assert fresh.events == reused.events
         assert "thumb" in shared.thumb_first_stage  # the memo was used
+
+
+def test_base_kit_is_one_kit_per_cmc_angle() -> None:
+    k = base_kit(30.0, "ulnar")
+    assert k is base_kit(30.0, "ulnar")
+    assert (k.hand.design.cmc_deg, k.hand.design.mcp_deg) == (30.0, BASE_MCP_DEG)
+
+
+def test_outcomes_do_not_depend_on_the_designs_sharing_a_task() -> None:
+    """A design's outcomes are the same whether it is simulated alone or after other designs
+    with the same CMC angle (a sweep's task grouping, the explorer's single design)."""
+    s = SimSettings()
+    d = ThumbDesign(15.0, 60.0)
+    gh = (0, 101, 333, 700)
+    alone = run_task(Task("washer", gh, (d,), s))
+    grouped = run_task(Task("washer", gh, (ThumbDesign(15.0, 90.0), d), s))
+    mine = [(gid, o) for di, gid, o in grouped if di == 1]
+    assert [gid for _, gid, _ in alone] == [gid for gid, _ in mine]
+    for (_, _, a), (_, b) in zip(alone, mine, strict=True):
+        # the query count is bookkeeping: a reused CMC-stage memo spends fewer queries
+        assert a.same_as(dataclasses.replace(b, n_queries=a.n_queries))

@@ -40,7 +40,7 @@ from app.sim.closing_settings import ClosingSettings
 from app.sim.hypotheses import Hypotheses
 from app.sim.hypothesis_sets import cached_hypotheses
 from app.sim.replay import Replay, replay
-from app.sim.simulate import HandKit
+from app.sim.simulate import HandKit, base_kit
 
 REPLAY_HZ = 30.0
 
@@ -314,7 +314,8 @@ class Session:
         """Simulate the selected GH at the current design and draw its final grasp."""
         i = self.gh
         s = self.settings
-        rep = replay(self.kit, self.obj, self.hyps, i, s)
+        d = self.design
+        rep = replay(self.kit, self.obj, self.hyps, i, s, base_kit=base_kit(d.cmc_deg, d.cmc_tilt))
         out = judge(rep.grasp, self.obj, s, rep.base.queries + rep.grasp.queries)
         self.last, self.outcome = rep, out
         g = rep.grasp

@@ -15,7 +15,8 @@ from app.sim.contacts import ContactSettings
 
 #: Bumped whenever a code change alters simulated outcomes: part of the settings key, so a
 #: store never serves results of an older engine as current.
-ENGINE_VERSION = 4  # 4: stage stop refined by false position (gap within 0.001 mm of tol)
+ENGINE_VERSION = 5  # 5: base stage always by the MCP-0 kit (results independent of grouping)
+# 4: stage stop refined by false position (gap within 0.001 mm of tol)
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ from app.quality.settings import SimSettings
 from app.runs.keys import design_key, object_key
 from app.runs.store import ResultStore
 from app.sim.hypothesis_sets import cached_hypotheses
-from app.sim.simulate import cached_kit, simulate_base, simulate_thumb
+from app.sim.simulate import base_kit, cached_kit, simulate_base, simulate_thumb
 
 #: ``--gh`` values that pick from the store instead of naming a hypothesis.
 PICKS = ("first-correct", "first-fc", "first-failed")
@@ -70,7 +70,7 @@ def render_grasp(
     hyps = cached_hypotheses(key)
     i = hyps.index_of(gh)
     kit = cached_kit(design.cmc_deg, design.mcp_deg, design.cmc_tilt)
-    base = simulate_base(kit, obj, hyps, i, s)
+    base = simulate_base(base_kit(design.cmc_deg, design.cmc_tilt), obj, hyps, i, s)
     grasp = simulate_thumb(kit, obj, base, s)
     out = judge(grasp, obj, s, 0)
     verdict = (

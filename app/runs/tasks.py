@@ -18,7 +18,7 @@ from app.runs.keys import design_key, set_object_key
 from app.runs.store import ResultStore
 from app.sim.bruteforce import ALL_FINGERS, BruteForceHypotheses
 from app.sim.hypothesis_sets import hypotheses_of
-from app.sim.simulate import BaseGrasp, cached_kit, simulate_base, simulate_thumb
+from app.sim.simulate import BaseGrasp, base_kit, cached_kit, simulate_base, simulate_thumb
 
 #: Hypotheses per task: small enough for a live progress bar, large enough to amortise.
 DEFAULT_CHUNK = 60
@@ -54,16 +54,18 @@ def run_task(task: Task) -> list[tuple[int, str, GraspOutcome]]:
     bf = isinstance(hyps, BruteForceHypotheses)
     for i in task.gh:
         # the open thumb (part of the approach) depends on the CMC angle only: one base
-        # stage per (CMC angle, tilt), shared by every MCP angle (docs/cost-model.md)
+        # stage per (CMC angle, tilt), shared by every MCP angle (docs/cost-model.md), always
+        # computed by the same kit (``base_kit``) whatever designs share the task
         bases: dict[tuple[float, str], BaseGrasp] = {}
         for di, (d, kit) in enumerate(zip(task.designs, kits, strict=True)):
             open_thumb = (d.cmc_deg, d.cmc_tilt)
             base = bases.get(open_thumb)
             if base is None:
+                bk = base_kit(d.cmc_deg, d.cmc_tilt)
                 if isinstance(hyps, BruteForceHypotheses):
-                    base = simulate_base(kit, obj, hyps.approach_line(i), i, s, fingers=ALL_FINGERS)
+                    base = simulate_base(bk, obj, hyps.approach_line(i), i, s, fingers=ALL_FINGERS)
                 else:
-                    base = simulate_base(kit, obj, hyps, i, s)
+                    base = simulate_base(bk, obj, hyps, i, s)
                 bases[open_thumb] = base
             g = simulate_thumb(kit, obj, base, s)
             o = judge(g, obj, s, base.queries + g.queries)

@@ -63,10 +63,14 @@ def replay(
     i: int,
     settings: SimulationSettings,
     frames_per_stage: int = 12,
+    base_kit: HandKit | None = None,
 ) -> Replay:
-    """Simulate hypothesis ``i`` recording its stages and expand them into frames."""
+    """Simulate hypothesis ``i`` recording its stages and expand them into frames.
+
+    ``base_kit`` computes the base stage (default ``kit``); pass
+    ``app.sim.simulate.base_kit(...)`` to replay exactly what a sweep scores."""
     sb = ClosingStats(stages=[])
-    base = simulate_base(kit, obj, hyps, i, settings, sb)
+    base = simulate_base(base_kit or kit, obj, hyps, i, settings, sb)
     st = ClosingStats(stages=[])
     grasp = simulate_thumb(kit, obj, base, settings, st)
     R = hyps.R_object_palm[i]

@@ -259,3 +259,16 @@ def simulate_thumb(
 def cached_kit(cmc_deg: float, mcp_deg: float, tilt: str) -> HandKit:
     """The simulation kit of a design (per process; the hand file is the default one)."""
     return HandKit(Hand(ThumbDesign(cmc_deg, mcp_deg, tilt), load_hand_dims()))  # type: ignore[arg-type]
+
+
+#: The MCP angle of the kit that computes a design's base stage. With MCP and IP open the
+#: thumb's capsules lie on the metacarpal's line, so the base stage (approach, back-off, long
+#: fingers, and the memo of the thumb's CMC stage) is the same for every MCP angle up to
+#: rounding; computing it always with one kit makes every result independent of which other
+#: designs were simulated beside it (a sweep's task grouping, the explorer's replay).
+BASE_MCP_DEG = 0.0
+
+
+def base_kit(cmc_deg: float, tilt: str) -> HandKit:
+    """The kit that computes the base stage of every design with this CMC angle and tilt."""
+    return cached_kit(cmc_deg, BASE_MCP_DEG, tilt)
