@@ -35,3 +35,7 @@ class UnknownHypothesisError(HandbenchError, KeyError):
 
     def __str__(self) -> str:
         return str(self.args[0]) if self.args else ""
+
+
+class TableError(HandbenchError, ValueError):
+    """A score table (ours or a reference) that cannot be read or lacks needed columns."""

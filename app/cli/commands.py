@@ -259,3 +259,34 @@ def cmd_screenshot(args: argparse.Namespace) -> int:
     from app.explorer.screenshot import screenshot_cli
 
     return screenshot_cli(args)
+
+
+def cmd_validate(args: argparse.Namespace) -> int:
+    from app.reports.validate import (
+        agreement,
+        agreement_markdown,
+        read_score_table,
+        write_agreement_csv,
+    )
+
+    ours = read_score_table(args.table)
+    ref = read_score_table(args.reference)
+    ag = agreement(ours, ref)
+    text = agreement_markdown(ag)
+    print(text)
+    if args.out:
+        from app.reports.validate_plots import plot_contour_pair, plot_lines_overlay
+
+        out = Path(args.out)
+        if out.exists() and not out.is_dir():
+            raise SettingsError(f"--out {out} is a file; give a folder")
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "agreement.md").write_text(text + "\n")
+        paths = [out / "agreement.md", write_agreement_csv(ag, out / "agreement.csv")]
+        if "total_sgas" in [m.measure for m in ag.measures]:
+            paths += [
+                plot_contour_pair(ag, out / "contour_pair.png"),
+                plot_lines_overlay(ag, out / "lines_overlay.png"),
+            ]
+        print("wrote " + ", ".join(str(q) for q in paths))
+    return 0

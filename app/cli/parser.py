@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -17,9 +18,15 @@ from app.cli.commands import (
     cmd_screenshot,
     cmd_serve,
     cmd_sweep,
+    cmd_validate,
 )
 from app.cli.flags import add_design_flags, add_run_flags, add_settings_flags
 from app.errors import HandbenchError
+
+#: The published rows shipped with the repository (``handbench validate``'s default).
+DEFAULT_REFERENCE = (
+    Path(__file__).resolve().parents[2] / "docs" / "reference" / "published_sgas_cmc0_cmc30.csv"
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -111,6 +118,19 @@ def build_parser() -> argparse.ArgumentParser:
     imp.add_argument("--key", help="key for the imported object (default: file name)")
     imp.add_argument("--save-to", help="folder to save it in (use with HANDBENCH_USER_OBJECTS)")
     s.set_defaults(func=cmd_objects)
+
+    s = sub.add_parser(
+        "validate", help="rank agreement of a score table with a reference (published) table"
+    )
+    s.add_argument("table", help="our table.csv (from handbench sweep)")
+    s.add_argument(
+        "--reference",
+        default=str(DEFAULT_REFERENCE),
+        help="reference table in the published form: cmc, mcp, per object fc/c/sgas "
+        "(default: the published CMC 0/30 rows, docs/reference/)",
+    )
+    s.add_argument("--out", help="folder for agreement.md/.csv and the side-by-side pictures")
+    s.set_defaults(func=cmd_validate)
 
     s = sub.add_parser("screenshot", help="headless browser screenshot of the explorer")
     add_design_flags(s)
