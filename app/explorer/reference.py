@@ -33,6 +33,10 @@ REFERENCE_NOTE = (
     "from the shipped reference sweep; not in your store — grasp replays and outcome "
     "filters need it computed"
 )
+REFERENCE_DIFF_NOTE = (
+    "The shipped table holds percentages rounded to 2 decimals and was computed by a "
+    "process pool; see docs/explorer.md, 'Shipped reference and your store'."
+)
 
 
 @dataclass(frozen=True)
