@@ -196,12 +196,18 @@ def test_screenshot_command(monkeypatch: pytest.MonkeyPatch) -> None:
 
     monkeypatch.setenv("HANDBENCH_EXPLORER_OBJECTS", "small_marker")
     monkeypatch.setenv("HANDBENCH_EXPLORER_WORKERS", "0")
+    cwd = BUILD / "cwd"
+    cwd.mkdir()
+    monkeypatch.chdir(cwd)  # the command must not write a profile here
+    monkeypatch.setenv("XDG_CACHE_HOME", str(BUILD / "cache"))
     out = BUILD / "cli.png"
     args = argparse.Namespace(
         cmc=30.0, mcp=75.0, cmc_tilt="ulnar", object="small_marker", gh="3", out=str(out),
-        size="900x600", view="scene", store=str(BUILD / "cli_store.sqlite"),
+        size="900x600", view="scene", store=str(BUILD / "cli_store.sqlite"), no_wait=True,
     )  # fmt: skip
     assert screenshot_cli(args) == 0
+    assert list(cwd.iterdir()) == []
+    assert (BUILD / "cache" / "handbench" / "chromium").is_dir()
     import matplotlib.pyplot as plt
 
     img = plt.imread(out)

@@ -234,3 +234,22 @@ def test_complete_store_differing_from_reference_says_which_is_used() -> None:
     md = reference_diff_markdown(mine, ref)
     assert "plastic_pear 38.3 shipped vs 38.5 yours" in md and "used here" in md
     assert reference_diff_markdown(mine, mine) == "Same as the shipped reference sweep."
+
+
+def test_screenshot_waits_for_complete_sgas() -> None:
+    import threading
+    import time
+    from types import SimpleNamespace
+    from typing import Any, cast
+
+    from app.explorer.screenshot import wait_sgas_complete
+
+    panel = SimpleNamespace(last=SimpleNamespace(state="computing"))
+    session = cast(Any, SimpleNamespace(score_panel=panel))
+    with pytest.raises(TimeoutError, match="--no-wait"):
+        wait_sgas_complete(session, 0.3)
+    t = threading.Timer(0.3, lambda: setattr(panel, "last", SimpleNamespace(state="complete")))
+    t.start()
+    t0 = time.monotonic()
+    wait_sgas_complete(session, 5.0)
+    assert 0.25 < time.monotonic() - t0 < 2.0
