@@ -283,3 +283,23 @@ def test_object_switch_during_replay(server: ExplorerServer, browser: Any) -> No
         assert "object=power_drill" in s.share_panel.link.content
     finally:
         page.close()
+
+
+def test_eight_tabs_opened_at_once_apply_their_links(server: ExplorerServer) -> None:
+    designs = [(c, m) for c in (0.0, 15.0, 30.0, 45.0) for m in (30.0, 60.0)]
+    before = set(server.sessions)
+    with browser_context(480, 320, BUILD / "profiles") as ctx:
+        pages = [ctx.new_page() for _ in designs]
+        for page, (c, m) in zip(pages, designs, strict=True):  # no wait between tabs
+            page.goto(f"{server.url}/?cmc={c:g}&mcp={m:g}&gh={int(c + m)}", wait_until="commit")
+        new = wait_until(
+            lambda: (ids := set(server.sessions) - before) and len(ids) == 8 and ids, 120,
+            "8 sessions",
+        )  # fmt: skip
+        sessions = [server.sessions[i] for i in new]
+        wait_until(lambda: all(s.ready.is_set() for s in sessions), 120, "8 links applied")
+        got = sorted((s.design.cmc_deg, s.design.mcp_deg, s.gh) for s in sessions)
+        assert got == sorted((c, m, int(c + m)) for c, m in designs)
+        assert [s.link_error for s in sessions] == [None] * 8
+        for page in pages:
+            page.close()

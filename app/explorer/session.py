@@ -44,6 +44,8 @@ from app.sim.replay import Replay, replay
 from app.sim.simulate import HandKit
 
 REPLAY_HZ = 30.0
+LINK_TIMEOUT_S = 60.0
+"""How long a new tab may take to report its link (retried requests, busy browsers)."""
 GHOST_HOLD_S = 4.0
 """The previous design's thumb stays as a ghost this long after the last design change."""
 
@@ -107,6 +109,8 @@ class Session:
         self._req: ThumbDesign | None = None
         self._busy = False
         self._ghost_timer: threading.Timer | None = None
+        self.link_error: str | None = None
+        """Why this tab's link was not applied (None: applied, or no link)."""
 
         self._setup_scene()
         self._setup_gui()
@@ -183,10 +187,11 @@ class Session:
         """Read the link state of this tab, draw the first scene, start the S_GAS worker."""
         state = url_state.UrlState()
         try:
-            search = self._read_probe(timeout_s=5.0)
+            search = self._read_probe(timeout_s=LINK_TIMEOUT_S)
             if search:
                 state = url_state.parse_query(search)
         except (TimeoutError, RuntimeError, HandbenchError) as e:
+            self.link_error = str(e)
             self.notify("Link not applied", str(e))
         self._probe.remove()
         if self._closed:
@@ -194,15 +199,23 @@ class Session:
         try:
             self.apply_state(state)
         except HandbenchError as e:
+            self.link_error = str(e)
             self.notify("Link not applied", str(e))
             self.apply_state(url_state.UrlState())
         self.ready.set()
 
     def _read_probe(self, timeout_s: float) -> str | None:
-        """Poll this tab's localStorage for the link query the probe writes."""
+        """Poll this tab's localStorage for the link query the probe writes.
+
+        Many tabs opening at once keep the browser busy (software WebGL) for many seconds:
+        one request timing out is retried until ``timeout_s`` has passed in all."""
         t_end = time.monotonic() + timeout_s
         while time.monotonic() < t_end and not self._closed:
-            v = self.client.local_storage.get_item(self._probe_key, timeout=timeout_s)
+            left = max(t_end - time.monotonic(), 0.1)
+            try:
+                v = self.client.local_storage.get_item(self._probe_key, timeout=min(left, 10.0))
+            except TimeoutError:
+                continue
             if v is not None:
                 self.client.local_storage.remove_item(self._probe_key)
                 return v
