@@ -34,8 +34,9 @@ REFERENCE_NOTE = (
     "filters need it computed"
 )
 REFERENCE_DIFF_NOTE = (
-    "The shipped table holds percentages rounded to 2 decimals and was computed by a "
-    "process pool; see docs/explorer.md, 'Shipped reference and your store'."
+    "A fresh computation can differ from the shipped sweep by a hypothesis or two (cause "
+    "not found yet; not the executor): see docs/explorer.md, 'Shipped reference and your "
+    "store'."
 )
 
 

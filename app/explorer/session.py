@@ -278,14 +278,14 @@ class Session:
             self.hand_view.set_pose(self.hand, T, q)
         self.client.flush()
         t1 = time.perf_counter()
+        self.map_panel.set_tilt(design.cmc_tilt)
+        self.map_panel.set_current(design.cmc_deg, design.mcp_deg)  # the star first: ~1 ms
         self._show_final()
         t2 = time.perf_counter()
         self.timings.hand_redraw.append(t1 - t0)
         self.timings.grasp_redraw.append(t2 - t0)
         self.worker.request(design, self.settings)
         self._refresh_outcomes()
-        self.map_panel.set_tilt(design.cmc_tilt)
-        self.map_panel.set_current(design.cmc_deg, design.mcp_deg)
         self.share_panel.update_link()
 
     def on_object(self, key: str) -> None:
