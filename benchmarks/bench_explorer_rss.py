@@ -42,7 +42,7 @@ def children(pid: int) -> list[int]:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--tabs", type=int, default=8)
     ap.add_argument("--rounds", type=int, default=10)
     ap.add_argument("--settle", type=float, default=3.0, help="seconds after closing the tabs")

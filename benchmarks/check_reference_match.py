@@ -24,7 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--executor", choices=("inline", "local"), default="inline")
     ap.add_argument("--cmc", type=float, default=0.0)
     ap.add_argument("--mcp", type=float, default=45.0)

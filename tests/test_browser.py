@@ -231,7 +231,12 @@ def test_typed_design_commits_once_and_rejects_bad_input(
     try:
         applied: list[tuple[float, float]] = []
         on_design = s.design_panel._on_design  # noqa: SLF001
-        s.design_panel._on_design = lambda c, m: (applied.append((c, m)), on_design(c, m))  # noqa: SLF001
+
+        def spy(c: float, m: float) -> None:
+            applied.append((c, m))
+            on_design(c, m)
+
+        s.design_panel._on_design = spy  # noqa: SLF001
         box = number_box(page, "MCP (°)")
         msg = page.locator(f".{MESSAGE_CLASS}")
         for bad, why in (("500", "outside 0 to 90"), ("-5", "outside"), ("abc", "not a number")):
