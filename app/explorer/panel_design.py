@@ -56,15 +56,20 @@ class DesignPanel:
         self._muted = False
         self.cmc = gui.add_slider(
             "CMC (°)", min=CMC_RANGE_DEG[0], max=CMC_RANGE_DEG[1], step=SLIDER_STEP_DEG,
-            initial_value=BASELINE.cmc_deg, hint=docs["cmc_deg"],
+            initial_value=BASELINE.cmc_deg,
             marks=tuple((v, f"{v:g}") for v in (0.0, 15.0, 30.0, 45.0)),
         )  # fmt: skip
         self.mcp = gui.add_slider(
             "MCP (°)", min=MCP_RANGE_DEG[0], max=MCP_RANGE_DEG[1], step=SLIDER_STEP_DEG,
-            initial_value=BASELINE.mcp_deg, hint=docs["mcp_deg"],
+            initial_value=BASELINE.mcp_deg,
             marks=tuple((v, f"{v:g}") for v in (0.0, 45.0, 90.0)),
         )  # fmt: skip
         self.message = gui.add_markdown("")
+        # the field docs as a caption, not as hover hints (those covered the tab bar)
+        gui.add_markdown(
+            f"<small>c: {docs['cmc_deg']}  \nm: {docs['mcp_deg']}  \n"
+            "Type a value and press Enter; drags move by 5°.</small>"
+        )
         self.valid = (BASELINE.cmc_deg, BASELINE.mcp_deg)
         """The last valid (cmc, mcp): what an invalid entry falls back to."""
         self._published = {design_label(d): d for d in published_designs()}
@@ -78,7 +83,8 @@ class DesignPanel:
         self.axes = gui.add_checkbox(
             "Thumb axes",
             initial_value=True,
-            hint="The design: CMC axis red, MCP green, IP blue (faded: the previous design)",
+            hint="CMC axis red, MCP green, IP blue; magenta: the thumb pad's flexion path "
+            "(faded: the previous design)",
         )
         self.cmc.on_update(lambda _: self._changed())
         self.mcp.on_update(lambda _: self._changed())

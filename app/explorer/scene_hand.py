@@ -15,6 +15,9 @@ GHOST_OPACITY = 0.35
 #: Joint-axis colours: CMC red, MCP green, IP blue (thumb), long fingers grey.
 AXIS_COLORS = ((220, 40, 40), (30, 160, 60), (40, 90, 220))
 AXIS_HALF_LENGTH_MM = 22.0
+PATH_COLOR = (220, 60, 200)
+"""The thumb pad's flexion path (the design's opposition), magenta."""
+PATH_STEPS = 24
 THUMB_AXIS_HALF_LENGTH_MM = 32.0
 """The thumb's axes are the design: drawn longer than the long fingers'."""
 
@@ -57,6 +60,7 @@ class HandView:
                 visible=not ghost,
             )
         self.axes: viser.LineSegmentsHandle | None = None
+        self.path: viser.LineSegmentsHandle | None = None
         self.show_axes = ghost
         self.thumb_axes_only = True
         """Only the thumb's axes (the design); the long fingers' are the same in every one."""
@@ -81,8 +85,9 @@ class HandView:
         """Show or hide every link node."""
         for node in self.nodes.values():
             node.visible = visible
-        if self.axes is not None:
-            self.axes.visible = visible and self.show_axes
+        for node in (self.axes, self.path):
+            if node is not None:
+                node.visible = visible and self.show_axes
 
     @property
     def visible(self) -> bool:
@@ -108,11 +113,40 @@ class HandView:
         self.show_axes = visible
         self._draw_axes()
 
+    def flex_path_mm(self) -> np.ndarray:
+        """(PATH_STEPS, 3) the thumb pad (centre of the distal phalanx) as the thumb's
+        three joints flex from the shown pose to their upper limits, object frame, mm.
+        At zero flexion every design looks alike; this path is where the design shows."""
+        h = self.hand
+        k = h.link_index["thumb_distal"]
+        centre = self._corners["thumb_distal"].mean(axis=0)
+        q0 = np.asarray(self.q, float)
+        out = []
+        for t in np.linspace(0.0, 1.0, PATH_STEPS):
+            q = q0.copy()
+            q[:3] = q0[:3] + t * (h.q_upper[:3] - q0[:3])
+            T = self.T_object_palm @ h.link_poses(q)[k]
+            out.append(T[:3, :3] @ centre + T[:3, 3])
+        return np.array(out)
+
     def _draw_axes(self) -> None:
         if not self.show_axes:
             if self.axes is not None:
                 self.axes.visible = False
+            if self.path is not None:
+                self.path.visible = False
             return
+        path = self.flex_path_mm()
+        pc = np.array(PATH_COLOR, float)
+        if self.ghost:
+            pc = 0.45 * pc + 0.55 * 255
+        self.path = self.scene.add_line_segments(
+            f"{self.root}_path",
+            points=to_scene(np.stack([path[:-1], path[1:]], axis=1)),
+            colors=pc.astype(np.uint8),
+            thickness=3.0 if self.ghost else 5.0,
+            thickness_units="screen",
+        )
         p, a = self.hand.joint_axes(self.q)
         R, t = self.T_object_palm[:3, :3], self.T_object_palm[:3, 3]
         p_obj = p @ R.T + t
