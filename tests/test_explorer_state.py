@@ -63,7 +63,12 @@ def test_score_table_partial() -> None:
     )
     md = snapshot_markdown(s)
     assert "CMC 15°, MCP 60°" in md and "computing 30/1026" in md
-    assert "(partial)" in md and "59.5" in md  # chips_can S_GAS = (200 + 50) / 420
+    assert "59.5" in md  # chips_can S_GAS = (200 + 50) / 420
+    # no mean over the finished objects: the totals wait for every object
+    assert "(partial)" not in md and "total **" not in md
+    assert "once all 2 objects are done (1 done" in md
+    # the running object's estimate so far: (1 + 1) / 30 = 6.7 %, with its intervals
+    assert "≈6.7 (95 % CI" in md and "certain 0–97" in md
 
 
 def test_link_tilt() -> None:
@@ -182,3 +187,69 @@ def test_reference_layer(tmp_path) -> None:  # noqa: ANN001
     assert snap.reference is not None and "shipped reference sweep" in snapshot_markdown(snap)
     assert read_snapshot(empty, ThumbDesign(0, 0), objs, settings, ref_dir=bad).reference is None
     assert read_snapshot(empty, ThumbDesign(5, 5), objs, settings, ref_dir=good).reference is None
+
+
+def test_wilson_interval_known_values() -> None:
+    from app.explorer.live_score import wilson_interval
+
+    lo, hi = wilson_interval(5, 10)  # textbook: 0.2366 .. 0.7634
+    assert lo == pytest.approx(0.2366, abs=1e-4) and hi == pytest.approx(0.7634, abs=1e-4)
+    lo, hi = wilson_interval(0, 20)  # never below 0, upper 0.1611
+    assert lo == 0.0 and hi == pytest.approx(0.1611, abs=1e-4)
+    assert wilson_interval(0, 0) == (0.0, 1.0)
+
+
+def test_object_progress_interval_and_time_left() -> None:
+    from app.explorer.live_score import ObjectProgress
+
+    # 100 of 400 done: 40 FC of which 30 correct -> credit 35 -> 35 %
+    p = ObjectProgress("x", 400, 100, 40, 30, computed=50, elapsed_s=10.0)
+    assert p.estimate_pct == pytest.approx(35.0)
+    lo, hi = p.interval_pct
+    assert lo < 35.0 < hi
+    c_lo, c_hi = p.certain_pct
+    assert (c_lo, c_hi) == (pytest.approx(8.75), pytest.approx(83.75))
+    # the finite-population correction narrows the plain Wilson interval
+    w = ObjectProgress("x", 10**9, 100, 40, 30)
+    assert hi - lo < w.interval_pct[1] - w.interval_pct[0]
+    assert p.rate_per_s == pytest.approx(5.0) and p.remaining_s == pytest.approx(60.0)
+    # complete: the interval is the value itself
+    done = ObjectProgress("x", 400, 400, 160, 120)
+    assert done.interval_pct == (pytest.approx(35.0), pytest.approx(35.0))
+    assert done.remaining_s is None  # nothing computed in this run: no rate
+    # a subsample estimate feeds the same display, marked as such
+    from app.explorer.live_score import progress_cell
+
+    sgas, prog = progress_cell(ObjectProgress("x", 400, 40, 20, 10, source="random sample"), True)
+    assert sgas.startswith("≈37.5 (95 % CI") and "(random sample)" in prog
+
+
+def test_complete_store_differing_from_reference_says_which_is_used() -> None:
+    from app.explorer.live_score import reference_diff_markdown
+    from app.quality.scores import DesignScore, ObjectScore
+
+    types = {"plastic_pear": "PP"}
+    mine = DesignScore({"plastic_pear": ObjectScore(648, 300, 199)}, types)
+    ref = DesignScore({"plastic_pear": ObjectScore(648, 300, 197)}, types)
+    md = reference_diff_markdown(mine, ref)
+    assert "plastic_pear 38.3 shipped vs 38.5 yours" in md and "used here" in md
+    assert reference_diff_markdown(mine, mine) == "Same as the shipped reference sweep."
+
+
+def test_screenshot_waits_for_complete_sgas() -> None:
+    import threading
+    import time
+    from types import SimpleNamespace
+    from typing import Any, cast
+
+    from app.explorer.screenshot import wait_sgas_complete
+
+    panel = SimpleNamespace(last=SimpleNamespace(state="computing"))
+    session = cast(Any, SimpleNamespace(score_panel=panel))
+    with pytest.raises(TimeoutError, match="--no-wait"):
+        wait_sgas_complete(session, 0.3)
+    t = threading.Timer(0.3, lambda: setattr(panel, "last", SimpleNamespace(state="complete")))
+    t.start()
+    t0 = time.monotonic()
+    wait_sgas_complete(session, 5.0)
+    assert 0.25 < time.monotonic() - t0 < 2.0

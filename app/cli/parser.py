@@ -145,6 +145,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="what to capture: the 3-D scene or the design map tab",
     )
     s.add_argument("--store", help="results database")
+    s.add_argument(
+        "--no-wait",
+        action="store_true",
+        help="take the picture at once, without waiting for the Live S_GAS numbers",
+    )
     s.set_defaults(func=cmd_screenshot)
     return p
 

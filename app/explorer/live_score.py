@@ -5,6 +5,11 @@ Cached outcomes (already in the store) show at once; the missing ones are comput
 by object (``run_sweep`` for one design and one object at a time, so each object's row
 fills in as soon as it is done) in a thread that a newer design cancels. A short debounce
 lets a dragged slider settle before any work starts.
+
+While an object computes, its row shows the hypotheses done, the S_GAS estimate so far with a
+95 % Wilson interval, the range the final value is certain to fall in, and the time left
+(``ObjectProgress``). The totals (PP, CG, total) appear only once every object is complete:
+a mean over the finished objects is not the design's score.
 """
 
 from __future__ import annotations
@@ -16,7 +21,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from app.explorer.reference import REFERENCE_NOTE, reference_score
+from app.explorer.reference import REFERENCE_DIFF_NOTE, REFERENCE_NOTE, reference_score
 from app.model.design import ThumbDesign
 from app.model.objects import load_object
 from app.quality.scores import DesignScore, ObjectScore
@@ -28,6 +33,89 @@ from app.runs.sweep import run_sweep
 from app.sim.hypothesis_sets import cached_hypotheses
 
 DEBOUNCE_S = 0.3
+Z95 = 1.959963984540054
+"""The normal quantile of a two-sided 95 % interval."""
+
+
+def wilson_interval(successes: float, n: int, z: float = Z95) -> tuple[float, float]:
+    """The Wilson score interval of a proportion (fractions, 0..1); (0, 1) when n = 0.
+
+    ``successes`` may be fractional (S_GAS counts an FC grasp of the wrong type as ½)."""
+    if n <= 0:
+        return 0.0, 1.0
+    p = min(max(successes / n, 0.0), 1.0)
+    z2 = z * z
+    denom = 1.0 + z2 / n
+    centre = (p + z2 / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z2 / (4 * n * n)) / denom
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+@dataclass(frozen=True)
+class ObjectProgress:
+    """One object's S_GAS while it is computed: what is known so far.
+
+    ``source`` says how the hypotheses done were chosen: 'run order' (the sweep's order,
+    ray by ray: not a random sample, so the Wilson interval may not cover early on, while
+    the certain range always does) or 'random sample' (a subsample estimate: the
+    Wilson interval, narrowed by the finite-population correction, applies)."""
+
+    key: str
+    n_gh: int
+    """All hypotheses of the object."""
+    done: int
+    """Hypotheses judged so far."""
+    n_fc: int
+    n_correct: int
+    computed: int = 0
+    """Hypotheses computed by this run (the rate of the time estimate)."""
+    elapsed_s: float = 0.0
+    """Time this run has spent on the object."""
+    source: str = "run order"
+
+    @property
+    def credit(self) -> float:
+        """C + ½ NC of the hypotheses done."""
+        return self.n_correct + 0.5 * (self.n_fc - self.n_correct)
+
+    @property
+    def estimate_pct(self) -> float:
+        """S_GAS of the hypotheses done (%; NaN before the first)."""
+        return 100.0 * self.credit / self.done if self.done else math.nan
+
+    @property
+    def interval_pct(self) -> tuple[float, float]:
+        """95 % Wilson interval of the final S_GAS (%), finite-population corrected, and
+        never outside ``certain_pct``."""
+        lo, hi = wilson_interval(self.credit, self.done)
+        if self.done and self.n_gh > 1:
+            p = self.credit / self.done
+            f = math.sqrt(max(self.n_gh - self.done, 0) / (self.n_gh - 1))
+            lo, hi = p - (p - lo) * f, p + (hi - p) * f
+        c_lo, c_hi = self.certain_pct
+        return max(100.0 * lo, c_lo), min(100.0 * hi, c_hi)
+
+    @property
+    def certain_pct(self) -> tuple[float, float]:
+        """Where the final S_GAS must lie (%): every remaining hypothesis failing, or
+        every one correct."""
+        if self.n_gh <= 0:
+            return 0.0, 100.0
+        rest = self.n_gh - self.done
+        return 100.0 * self.credit / self.n_gh, 100.0 * (self.credit + rest) / self.n_gh
+
+    @property
+    def rate_per_s(self) -> float | None:
+        """Hypotheses per second of this run (None until measurable)."""
+        if self.computed <= 0 or self.elapsed_s <= 0:
+            return None
+        return self.computed / self.elapsed_s
+
+    @property
+    def remaining_s(self) -> float | None:
+        """Time left for this object at the current rate (None: not known yet)."""
+        r = self.rate_per_s
+        return None if r is None else (self.n_gh - self.done) / r
 
 
 @dataclass
@@ -49,6 +137,18 @@ class ScoreSnapshot:
     extra: dict[str, str] = field(default_factory=dict)
     reference: DesignScore | None = None
     """The shipped reference sweep's score of this design (None: not a shipped design)."""
+    progress: dict[str, ObjectProgress] = field(default_factory=dict)
+    """The object being computed (and any with a subsample estimate): progress so far."""
+    rate_per_s: float | None = None
+    """Hypotheses per second of the latest computation (for the time left of pending objects)."""
+
+    def remaining_s(self) -> float | None:
+        """Time left for every incomplete object at the measured rate (None: unknown)."""
+        if self.rate_per_s is None:
+            return None
+        left = sum(self.n_gh[k] - min(self.counts.get(k, (0, 0, 0))[0], self.n_gh[k])
+                   for k in self.n_gh)  # fmt: skip
+        return left / self.rate_per_s
 
     def complete(self, key: str) -> bool:
         """All hypotheses of ``key`` are stored."""
@@ -82,13 +182,32 @@ def _pct(x: float | None) -> str:
     return "–" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.1f}"
 
 
+def _secs(t: float | None) -> str:
+    if t is None:
+        return "time left: measuring"
+    return f"~{t:.0f} s left" if t < 120 else f"~{t / 60:.0f} min left"
+
+
+def progress_cell(p: ObjectProgress, running: bool) -> tuple[str, str]:
+    """(S_GAS cell, progress cell) of an incomplete object."""
+    head = f"{'computing' if running else 'pending'} {p.done}/{p.n_gh}"
+    if not p.done:
+        return "–", head
+    lo, hi = p.interval_pct
+    c_lo, c_hi = p.certain_pct
+    sgas = f"≈{_pct(p.estimate_pct)} (95 % CI {lo:.1f}–{hi:.1f}; certain {c_lo:.0f}–{c_hi:.0f})"
+    tail = f", {_secs(p.remaining_s)}" if running else ""
+    src = "" if p.source == "run order" else f" ({p.source})"
+    return sgas, head + tail + src
+
+
 def snapshot_markdown(s: ScoreSnapshot) -> str:
-    """The S_GAS table: one row per object, then PP, CG and total."""
+    """The S_GAS table: one row per object, then PP, CG and total (complete designs only)."""
     rows = [
         f"**CMC {s.design.cmc_deg:g}°, MCP {s.design.mcp_deg:g}°** — {s.state}",
         "",
-        "| object | type | FC % | C % | S_GAS % |",
-        "|---|---|---:|---:|---:|",
+        "| object | type | FC % | C % | S_GAS % | progress |",
+        "|---|---|---:|---:|---:|---|",
     ]
     score = s.score()
     for k in s.n_gh:
@@ -96,30 +215,57 @@ def snapshot_markdown(s: ScoreSnapshot) -> str:
         if k in score.objects:
             o = score.objects[k]
             rows.append(
-                f"| {k} | {gt} | {_pct(o.fc_pct)} | {_pct(o.c_pct)} | **{_pct(o.sgas_pct)}** |"
+                f"| {k} | {gt} | {_pct(o.fc_pct)} | {_pct(o.c_pct)} | **{_pct(o.sgas_pct)}** "
+                "| done |"
             )
         else:
-            n = s.counts.get(k, (0, 0, 0))[0]
-            mark = "computing" if s.running == k else "pending"
-            rows.append(f"| {k} | {gt} | {mark} {n}/{s.n_gh[k]} | | |")
+            n, fc, c = s.counts.get(k, (0, 0, 0))
+            p = s.progress.get(k) or ObjectProgress(k, s.n_gh[k], n, fc, c)
+            sgas, prog = progress_cell(p, s.running == k)
+            rows.append(f"| {k} | {gt} | | | {sgas} | {prog} |")
     complete = len(score.objects) == len(s.n_gh)
-    note = "" if complete else " (partial)"
-    rows += [
-        "",
-        f"PP **{_pct(score.pp_sgas_pct)}** · CG **{_pct(score.cg_sgas_pct)}** · "
-        f"total **{_pct(score.total_sgas_pct)}**{note}",
-    ]
+    rows.append("")
+    if complete:
+        rows.append(
+            f"PP **{_pct(score.pp_sgas_pct)}** · CG **{_pct(score.cg_sgas_pct)}** · "
+            f"total **{_pct(score.total_sgas_pct)}** (your store)"
+        )
+    else:
+        rows.append(
+            f"PP, CG and total: once all {len(s.n_gh)} objects are done "
+            f"({len(score.objects)} done; {_secs(s.remaining_s())})"
+        )
     if s.seconds:
         rows.append(f"computed in {s.seconds:.1f} s")
-    if s.reference is not None and not complete:  # the shipped row first: it is complete
-        rows[1:1] = ["", reference_markdown(s.reference), "", "**Your store:**"]
+    if s.reference is not None:
+        if not complete:  # the shipped row first: it is complete
+            rows[1:1] = ["", reference_markdown(s.reference), "", "**Your store:**"]
+        else:
+            rows += ["", reference_diff_markdown(score, s.reference)]
     return "\n".join(rows)
 
 
+def reference_diff_markdown(store: DesignScore, ref: DesignScore) -> str:
+    """Your complete store row against the shipped one: which objects differ, which is used."""
+    diff = [
+        f"{k} {_pct(ref.objects[k].sgas_pct)} shipped vs {_pct(o.sgas_pct)} yours"
+        for k, o in store.objects.items()
+        if k in ref.objects and ref.objects[k] != o
+    ]
+    if not diff:
+        return "Same as the shipped reference sweep."
+    return (
+        "**Differs from the shipped reference** (used here and on the map: your store): "
+        + "; ".join(diff)
+        + f"; shipped total {_pct(ref.total_sgas_pct)}. "
+        + REFERENCE_DIFF_NOTE
+    )
+
+
 def reference_markdown(ref: DesignScore) -> str:
-    """The shipped reference sweep's row of a design (shown until the store has it)."""
+    """The shipped reference sweep's row of a design (used until the store has it)."""
     rows = [
-        f"**Shipped reference** — {REFERENCE_NOTE}.",
+        f"**Shipped reference** (used until your store has this design) — {REFERENCE_NOTE}.",
         "",
         "| object | FC % | C % | S_GAS % |",
         "|---|---:|---:|---:|",
@@ -221,9 +367,11 @@ class ScoreWorker:
                 if snap.complete(key):
                     continue
                 snap.running = key
-                have = snap.counts.get(key, (0, 0, 0))[0]
+                have, fc0, c0 = snap.counts.get(key, (0, 0, 0))
                 snap.done, snap.total = 0, snap.n_gh[key] - have
+                snap.progress[key] = ObjectProgress(key, snap.n_gh[key], have, fc0, c0)
                 self.on_snapshot(snap)
+                t_obj = time.perf_counter()
 
                 def progress(
                     done: int,
@@ -231,12 +379,23 @@ class ScoreWorker:
                     snap: ScoreSnapshot = snap,
                     key: str = key,
                     have: int = have,
+                    t_obj: float = t_obj,
                 ) -> None:
                     snap.done, snap.total = done, total
-                    if not cancel.is_set():
-                        counts = snap.counts[key]
-                        snap.counts[key] = (have + done, counts[1], counts[2])
-                        self.on_snapshot(snap)
+                    if cancel.is_set():
+                        return
+                    # the judged outcomes so far (one SQL aggregate per reported chunk)
+                    n, fc, c = self.store.summary(design_key(design), settings.key()).get(
+                        object_key(key), (have + done, 0, 0)
+                    )
+                    p = ObjectProgress(
+                        key, snap.n_gh[key], n, fc, c, computed=n - have,
+                        elapsed_s=time.perf_counter() - t_obj,
+                    )  # fmt: skip
+                    snap.progress[key] = p
+                    snap.rate_per_s = p.rate_per_s or snap.rate_per_s
+                    snap.counts[key] = (n, fc, c)
+                    self.on_snapshot(snap)
 
                 res = run_sweep(
                     [design], [key], settings=settings, store=self.store,
@@ -246,6 +405,7 @@ class ScoreWorker:
                     return
                 fresh = read_snapshot(self.store, design, self.objects, settings, self.ref_dir)
                 snap.counts[key] = fresh.counts[key]
+                snap.progress.pop(key, None)
                 self.on_object_done(key)
             snap.running = None
             snap.state = "complete"

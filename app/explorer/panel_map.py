@@ -3,10 +3,11 @@ the computed designs and the current one marked, a table, and a design picker.""
 
 from __future__ import annotations
 
-import io
 import math
 import threading
+import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib
@@ -16,6 +17,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import viser  # noqa: E402
+from matplotlib.path import Path as MplPath  # noqa: E402
 
 from app.explorer.map_data import (  # noqa: E402
     TOTAL,
@@ -33,55 +35,158 @@ from app.runs.store import ResultStore  # noqa: E402
 PICK_NONE: str = "(pick a computed design)"
 
 
-def render_map(
-    points: Sequence[MapPoint], metric: str, current: tuple[float, float], size=(560, 620)
-) -> np.ndarray:
-    """The map as an RGB image (H, W, 3): contour of ``metric``, designs and current marked."""
+MAP_SIZE = (400, 440)
+"""(width, height) px of the map: the width of the panel, so fonts are shown at their size."""
+LABEL_GRID_DEG = 15.0
+"""With many designs (the 5° map) only those on the published 15° grid get a value label."""
+MAX_LABELS = 40
+
+
+@dataclass(frozen=True)
+class MapImage:
+    """A rendered map without the current-design star, and where designs land on it."""
+
+    image: np.ndarray
+    """(H, W, 3) uint8."""
+    origin_px: tuple[float, float]
+    """Pixel (x, y) of CMC 0°, MCP 0°."""
+    px_per_deg: tuple[float, float]
+    """Pixels per degree along CMC (x, rightward) and MCP (y, upward: negative)."""
+    metric: str
+
+    def pixel(self, cmc_deg: float, mcp_deg: float) -> tuple[float, float]:
+        """Pixel (x, y) of a design."""
+        return (
+            self.origin_px[0] + cmc_deg * self.px_per_deg[0],
+            self.origin_px[1] + mcp_deg * self.px_per_deg[1],
+        )
+
+
+def _labelled(points: Sequence[MapPoint]) -> list[bool]:
+    if len(points) <= MAX_LABELS:
+        return [True] * len(points)
+    return [p.cmc_deg % LABEL_GRID_DEG == 0 and p.mcp_deg % LABEL_GRID_DEG == 0 for p in points]
+
+
+def render_base(points: Sequence[MapPoint], metric: str, size=MAP_SIZE) -> MapImage:
+    """The map of ``metric``: contours, a horizontal colour bar under the axes (clear of the
+    labels), the designs, and value labels placed inside the axes (left of the point at the
+    CMC 45° edge, below it at the MCP 90° edge), on a white box."""
     w, h = size
-    fig, ax = plt.subplots(figsize=(w / 100, h / 100), dpi=100)
+    fig = plt.figure(figsize=(w / 100, h / 100), dpi=100)
+    ax = fig.add_axes((0.15, 0.30, 0.80, 0.62))
+    cax = fig.add_axes((0.15, 0.12, 0.80, 0.035))
     c = np.array([p.cmc_deg for p in points])
     m = np.array([p.mcp_deg for p in points])
     v = np.array([metric_value(p.score, metric) for p in points])
     ok = np.isfinite(v)
     shipped = np.array([p.source == "shipped" for p in points], bool)
-    n_ship = int((ok & shipped).sum())
-    title = f"{metric} (%) — {int(ok.sum())} computed designs"
-    if n_ship:
-        title += f"\n({n_ship} of them from the shipped reference, ◇)"
+    note = ""
     if ok.sum() >= 3:
         try:
             gc, gm, Z = interpolate_map(c[ok], m[ok], v[ok], step_deg=1.0)
             cs = ax.contourf(gc, gm, Z, levels=12, cmap="viridis")
-            fig.colorbar(cs, ax=ax, fraction=0.05, pad=0.02, label="%")
+            cb = fig.colorbar(cs, cax=cax, orientation="horizontal")
+            cb.set_label(f"{metric} (%)", fontsize=9)
+            cb.ax.tick_params(labelsize=8)
         except ValueError as e:
-            title += f"\n(no interpolation: {e})"
-    elif len(points):
-        title += "\n(3 or more designs needed for contours)"
+            note = f" (no contours: {e})"
+    else:
+        note = " (contours need 3 designs)"
+    if not cax.has_data() and not cax.collections:
+        cax.set_axis_off()
     if (~shipped).any():
-        ax.scatter(c[~shipped], m[~shipped], s=22, c="white", edgecolors="black",
-                   linewidths=0.8, label="your store")  # fmt: skip
+        ax.scatter(c[~shipped], m[~shipped], s=26, c="white", edgecolors="black",
+                   linewidths=0.9, zorder=3)  # fmt: skip
     if shipped.any():
         ax.scatter(c[shipped], m[shipped], s=26, marker="D", c="lightgrey", edgecolors="dimgray",
-                   linewidths=0.8, label="shipped reference")  # fmt: skip
-    for ci, mi, vi in zip(c, m, v, strict=True):
-        if math.isfinite(vi):
-            ax.annotate(f"{vi:.0f}", (ci, mi), textcoords="offset points", xytext=(4, 3),
-                        fontsize=7, color="black")  # fmt: skip
-    ax.scatter([current[0]], [current[1]], s=160, marker="*", c="red", edgecolors="black",
-               label="current", zorder=5)  # fmt: skip
+                   linewidths=0.9, zorder=3)  # fmt: skip
+    for ci, mi, vi, lab in zip(c, m, v, _labelled(points), strict=True):
+        if not (lab and math.isfinite(vi)):
+            continue
+        right = ci >= CMC_RANGE_DEG[1] - 1e-9
+        top = mi >= MCP_RANGE_DEG[1] - 1e-9
+        ax.annotate(
+            f"{vi:.0f}", (ci, mi), textcoords="offset points",
+            xytext=(-7 if right else 7, -6 if top else 5),
+            ha="right" if right else "left", va="top" if top else "bottom",
+            fontsize=9, color="black", zorder=4, annotation_clip=True,
+            bbox={"boxstyle": "round,pad=0.12", "fc": "white", "ec": "none", "alpha": 0.75},
+        )  # fmt: skip
     ax.set_xlim(*CMC_RANGE_DEG)
     ax.set_ylim(*MCP_RANGE_DEG)
-    ax.set_xlabel("thumb CMC axis c (°)")
-    ax.set_ylabel("thumb MCP axis m (°)")
-    ax.set_title(title, fontsize=9)
-    ax.legend(loc="upper right", fontsize=7, framealpha=0.8)
-    fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png")
+    ax.set_xticks(np.arange(CMC_RANGE_DEG[0], CMC_RANGE_DEG[1] + 1, 15.0))
+    ax.set_yticks(np.arange(MCP_RANGE_DEG[0], MCP_RANGE_DEG[1] + 1, 15.0))
+    ax.tick_params(labelsize=9)
+    ax.set_xlabel("CMC axis c (°)", fontsize=9, labelpad=1)
+    ax.set_ylabel("MCP axis m (°)", fontsize=9)
+    ax.set_title(f"{metric} (%), {int(ok.sum())} designs{note}", fontsize=10)
+    fig.canvas.draw()
+    (x0, y0), (x1, y1) = ax.transData.transform(
+        [(CMC_RANGE_DEG[0], MCP_RANGE_DEG[0]), (CMC_RANGE_DEG[1], MCP_RANGE_DEG[1])]
+    )
+    rgba = np.asarray(fig.canvas.buffer_rgba())  # type: ignore[attr-defined]
+    img = rgba[..., :3].copy()
     plt.close(fig)
-    buf.seek(0)
-    img = plt.imread(buf)
-    return (img[..., :3] * 255).astype(np.uint8)
+    H = img.shape[0]  # display y grows upward, pixel rows downward
+    span_c = CMC_RANGE_DEG[1] - CMC_RANGE_DEG[0]
+    span_m = MCP_RANGE_DEG[1] - MCP_RANGE_DEG[0]
+    return MapImage(
+        img,
+        (
+            x0 - CMC_RANGE_DEG[0] * (x1 - x0) / span_c,
+            H - y0 + MCP_RANGE_DEG[0] * (y1 - y0) / span_m,
+        ),
+        ((x1 - x0) / span_c, -(y1 - y0) / span_m),
+        metric,
+    )
+
+
+def _star_mask(r_out: float, size: int) -> np.ndarray:
+    """(size, size) bool: a five-pointed star of outer radius ``r_out`` px, centred."""
+    ang = np.pi / 2 + np.arange(10) * np.pi / 5
+    rad = np.where(np.arange(10) % 2 == 0, r_out, r_out * 0.45)
+    poly = np.stack([rad * np.cos(ang), -rad * np.sin(ang)], axis=1) + size / 2
+    yy, xx = np.mgrid[0:size, 0:size]
+    return (
+        MplPath(poly)
+        .contains_points(np.stack([xx.ravel() + 0.5, yy.ravel() + 0.5], 1))
+        .reshape(size, size)
+    )
+
+
+_STAR_SIZE = 25
+_STAR_EDGE = _star_mask(11.0, _STAR_SIZE)
+_STAR_FILL = _star_mask(7.5, _STAR_SIZE)
+
+
+def with_star(base: MapImage, cmc_deg: float, mcp_deg: float) -> np.ndarray:
+    """The map with the current design's star (red, black edge): a few ms, no re-render."""
+    img = base.image.copy()
+    x, y = base.pixel(cmc_deg, mcp_deg)
+    x0, y0 = int(round(x)) - _STAR_SIZE // 2, int(round(y)) - _STAR_SIZE // 2
+    H, W = img.shape[:2]
+    sx0, sy0 = max(0, -x0), max(0, -y0)
+    sx1, sy1 = min(_STAR_SIZE, W - x0), min(_STAR_SIZE, H - y0)
+    if sx1 <= sx0 or sy1 <= sy0:
+        return img
+    win = img[y0 + sy0 : y0 + sy1, x0 + sx0 : x0 + sx1]
+    win[_STAR_EDGE[sy0:sy1, sx0:sx1]] = (0, 0, 0)
+    win[_STAR_FILL[sy0:sy1, sx0:sx1]] = (230, 20, 20)
+    return img
+
+
+def render_map(
+    points: Sequence[MapPoint], metric: str, current: tuple[float, float], size=MAP_SIZE
+) -> np.ndarray:
+    """The map as an RGB image (H, W, 3): contour of ``metric``, designs and current marked."""
+    return with_star(render_base(points, metric, size), *current)
+
+
+LEGEND_MD = (
+    "○ your store · ◇ shipped reference · <span style='color:rgb(230,20,20)'>★</span> "
+    "current design"
+)
 
 
 def table_markdown(points: Sequence[MapPoint]) -> str:
@@ -125,20 +230,30 @@ class MapPanel:
         self._on_pick = on_pick
         self.metric = gui.add_dropdown("Map of", options=metric_choices(self.objects),
                                        initial_value=TOTAL)  # fmt: skip
-        self.image = gui.add_image(np.full((62, 56, 3), 255, np.uint8), format="png")
+        self.image = gui.add_image(np.full((44, 40, 3), 255, np.uint8), format="png")
+        gui.add_markdown(LEGEND_MD)
         pick_opts: tuple[str, ...] = (PICK_NONE,)
         self.pick = gui.add_dropdown("Go to design", options=pick_opts,
                                      initial_value=PICK_NONE)  # fmt: skip
         self.refresh_btn = gui.add_button("Reload from store", icon=viser.Icon.REFRESH)
         self.table = gui.add_markdown("")
-        self.metric.on_update(lambda _: self._kick(reload=False))
+        self.metric.on_update(lambda _: self._new_metric())
         self.pick.on_update(lambda _: self._picked())
         self.refresh_btn.on_click(lambda _: self.refresh())
         self._lock = threading.Lock()
         self._dirty: bool | None = None  # None: clean; False: redraw; True: reload + redraw
         self._busy = False
+        self._base: MapImage | None = None
         self.renders = 0
+        """Full renders (contours); moving the star is not one."""
+        self.star_at: tuple[float, float] | None = None
+        """Where the star was last drawn, and when (``star_time``)."""
+        self.star_time = 0.0
         self.refresh()
+
+    def _new_metric(self) -> None:
+        self._base = None
+        self._kick(reload=False)
 
     def set_current(self, cmc_deg: float, mcp_deg: float) -> None:
         """Move the current-design marker."""
@@ -183,8 +298,14 @@ class MapPanel:
                 opts = (PICK_NONE, *(p.label for p in self.points))
                 if tuple(self.pick.options) != opts:
                     self.pick.options = opts
-            self.image.image = render_map(self.points, self.metric.value, self.current)
-            self.renders += 1
+                self._base = None
+            base = self._base
+            if base is None or base.metric != self.metric.value:
+                base = self._base = render_base(self.points, self.metric.value)
+                self.renders += 1
+            current = self.current
+            self.image.image = with_star(base, *current)
+            self.star_at, self.star_time = current, time.monotonic()
 
     def _picked(self) -> None:
         label = self.pick.value

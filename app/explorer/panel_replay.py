@@ -109,10 +109,14 @@ class ReplayPanel:
             self.standoff.options = (ALL, *(f"{v:g} mm" for v in st))
             self.roll.options = (ALL, *(f"{v:g}°" for v in rl))
             self.ray.options = (ALL, *(str(r) for r in sorted(set(hyps.ray_index.tolist()))))
-            for dd in (self.standoff, self.roll, self.ray):
+            for dd in (self.standoff, self.roll, self.ray, self.outcome):
                 dd.value = ALL
         finally:
             self._muted = False
+        self._outcomes = {}
+        self._known = set()
+        self._refresh_slider(keep=None)  # the GH range of the new object, not the old one
+        self._update_count()
 
     def set_known(self, ids: set[str]) -> None:
         """Ids of the GHs with a stored outcome for the current design (the outcome filter

@@ -41,8 +41,24 @@ def lan_hint(port: int) -> str:
     )
 
 
+def _tunnel_in_a_thread() -> None:
+    """Make viser run its share tunnel in a thread of this process.
+
+    viser starts the tunnel in a ``multiprocessing`` process when the main script has an
+    ``if __name__ == "__main__"`` guard (the ``handbench`` entry point has one): with the
+    default 'fork' start method that copies the whole server (450-640 MB), and the copy
+    outlives a SIGTERM of the server, holding its port. viser's own thread mode is chosen
+    by ``viser._tunnel._is_multiprocess_ok``; answering False selects it.
+    """
+    import viser._tunnel as tunnel  # noqa: PLC2701 - no public switch for this
+
+    tunnel._is_multiprocess_ok = lambda: False  # type: ignore[assignment]  # noqa: SLF001
+
+
 def request_share_url(server: viser.ViserServer, timeout_s: float = SHARE_TIMEOUT_S) -> str | None:
-    """viser's public share URL, or None when offline or slower than ``timeout_s``."""
+    """viser's public share URL (its tunnel in a thread of this process, never a forked
+    copy), or None when offline or slower than ``timeout_s``."""
+    _tunnel_in_a_thread()
     box: list[str | None] = [None]
 
     def run() -> None:

@@ -33,6 +33,11 @@ REFERENCE_NOTE = (
     "from the shipped reference sweep; not in your store — grasp replays and outcome "
     "filters need it computed"
 )
+REFERENCE_DIFF_NOTE = (
+    "A fresh computation can differ from the shipped sweep by a hypothesis or two (cause "
+    "not found yet; not the executor): see docs/explorer.md, 'Shipped reference and your "
+    "store'."
+)
 
 
 @dataclass(frozen=True)

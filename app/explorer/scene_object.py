@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import trimesh
 import viser
 
 from app.explorer.units import to_scene
@@ -20,6 +21,13 @@ CONTACT_COLORS = {
     "non_palmar": (245, 140, 20),
     "palm": (40, 100, 230),
 }
+CONTACT_RADIUS_MM = 4.0
+"""Contact markers: spheres this big (a fingertip pad is ~10 mm wide) ..."""
+OUTLINE_SCALE = 1.45
+"""... with a dark outline (the back faces of a sphere this much larger)."""
+OUTLINE_COLOR = (25, 25, 25)
+OBJECT_OPACITY_WITH_CONTACTS = 0.5
+"""The object turns translucent while contacts are shown, so none hides behind it."""
 RAY_LENGTH_MM = 120.0
 NORMAL_LENGTH_MM = 20.0
 N_LENGTH_MM = 60.0
@@ -42,18 +50,36 @@ class ObjectView:
     def __init__(self, scene: viser.SceneApi, root: str = "/object") -> None:
         self.scene = scene
         self.root = root
-        self.contacts_node: viser.PointCloudHandle | None = None
+        self.contacts_node: viser.BatchedMeshHandle | None = None
         self.n_contacts = 0
+        self.classes: set[str] = set()
+        """Contact classes ('palmar', 'non_palmar', 'palm') shown now."""
+        self._mesh: tuple[np.ndarray, np.ndarray] | None = None
+        self._translucent = False
+        sphere = trimesh.creation.icosphere(subdivisions=2, radius=CONTACT_RADIUS_MM)
+        self._sphere = (to_scene(sphere.vertices), np.asarray(sphere.faces, np.uint32))
 
     def set_object(self, mesh_vertices_mm: np.ndarray, faces: np.ndarray) -> None:
         """(Re)draw the object mesh (object frame)."""
+        self._mesh = (to_scene(mesh_vertices_mm), np.asarray(faces, dtype=np.uint32))
+        self._draw_mesh()
+
+    def _draw_mesh(self) -> None:
+        if self._mesh is None:
+            return
         self.scene.add_mesh_simple(
             f"{self.root}/mesh",
-            vertices=to_scene(mesh_vertices_mm),
-            faces=np.asarray(faces, dtype=np.uint32),
+            vertices=self._mesh[0],
+            faces=self._mesh[1],
             color=OBJECT_COLOR,
+            opacity=OBJECT_OPACITY_WITH_CONTACTS if self._translucent else None,
             flat_shading=False,
         )
+
+    def _set_translucent(self, on: bool) -> None:
+        if on != self._translucent:
+            self._translucent = on
+            self._draw_mesh()
 
     def set_cone(self, hyps: Hypotheses, selected: int) -> None:
         """One segment per approach ray, from the target outward; the selected GH's ray
@@ -90,26 +116,35 @@ class ObjectView:
         )
 
     def set_contacts(self, contacts: ContactSet | None) -> None:
-        """Contact points (point cloud) and their normals (segments), or remove them."""
-        if contacts is None or len(contacts) == 0:
-            for name in ("contacts", "normals"):
+        """Contact spheres (outlined, coloured by class) and their normals, or remove them.
+        The object is translucent while contacts are shown."""
+        empty = contacts is None or len(contacts) == 0
+        self._set_translucent(not empty)
+        if contacts is None or empty:
+            for name in ("contacts", "contacts_outline", "normals"):
                 self.scene.add_point_cloud(
                     f"{self.root}/{name}",
                     points=np.zeros((0, 3), np.float32),
                     colors=(0, 0, 0),
                     visible=False,
                 )
+            self.contacts_node = None
             self.n_contacts = 0
+            self.classes = set()
             return
         colors = contact_colors(contacts)
-        self.contacts_node = self.scene.add_point_cloud(
-            f"{self.root}/contacts",
-            points=to_scene(contacts.p_object),
-            colors=colors,
-            point_size=0.006,
-            point_shape="circle",
-            precision="float32",
-        )
+        pos = to_scene(contacts.p_object)
+        wxyz = np.tile(np.array([1.0, 0.0, 0.0, 0.0], np.float32), (len(pos), 1))
+        v, f = self._sphere
+        self.scene.add_batched_meshes_simple(
+            f"{self.root}/contacts_outline", v, f, wxyz, pos,
+            batched_scales=np.full(len(pos), OUTLINE_SCALE, np.float32),
+            batched_colors=OUTLINE_COLOR, side="back", cast_shadow=False, lod="off",
+        )  # fmt: skip
+        self.contacts_node = self.scene.add_batched_meshes_simple(
+            f"{self.root}/contacts", v, f, wxyz, pos,
+            batched_colors=colors, cast_shadow=False, lod="off",
+        )  # fmt: skip
         seg = np.stack(
             [contacts.p_object, contacts.p_object - NORMAL_LENGTH_MM * contacts.n_object], axis=1
         )
@@ -117,7 +152,10 @@ class ObjectView:
             f"{self.root}/normals",
             points=to_scene(seg),
             colors=np.repeat(colors[:, None, :], 2, axis=1),
-            thickness=2.0,
+            thickness=3.0,
             thickness_units="screen",
         )
         self.n_contacts = len(contacts)
+        self.classes = {
+            k for k, c in CONTACT_COLORS.items() if (colors == np.array(c, np.uint8)).all(1).any()
+        }

@@ -1,9 +1,15 @@
 """``handbench screenshot``: open a state of the explorer in headless chromium and save a
-picture of the page (3-D view and panels), e.g. for docs and reports."""
+picture of the page (3-D view and panels), e.g. for docs and reports.
+
+By default the picture waits until the Live S_GAS panel is complete (``--no-wait``: take it
+at once, numbers possibly still computing). Chromium's throw-away profile lives under
+``$XDG_CACHE_HOME/handbench/chromium`` (``~/.cache/...``), never in the current folder.
+"""
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -11,6 +17,7 @@ from pathlib import Path
 from app.errors import HandbenchError, SettingsError
 from app.explorer.browser import browser_context, hide_toasts, wait_drawn
 from app.explorer.server import ExplorerServer, workers_from_env
+from app.explorer.session import Session
 from app.explorer.url_state import UrlState
 
 
@@ -25,6 +32,12 @@ def parse_size(text: str) -> tuple[int, int]:
     return w, h
 
 
+def profile_root() -> Path:
+    """Where chromium's throw-away profiles go: ``$XDG_CACHE_HOME/handbench/chromium``."""
+    cache = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(cache) / "handbench" / "chromium"
+
+
 def take_screenshot(
     out: Path,
     state: UrlState,
@@ -33,8 +46,13 @@ def take_screenshot(
     store_path: str | Path | None = None,
     server: ExplorerServer | None = None,
     timeout_s: float = 90.0,
+    wait_sgas: bool = True,
+    sgas_timeout_s: float = 600.0,
 ) -> Path:
-    """Serve (unless ``server`` is given), open ``state`` in chromium, save a PNG of the page."""
+    """Serve (unless ``server`` is given), open ``state`` in chromium, save a PNG of the page.
+
+    ``wait_sgas``: first wait (up to ``sgas_timeout_s``) for the Live S_GAS computation of
+    the design to complete, so the picture shows final numbers."""
     own = server is None
     # the S_GAS panel computes in a thread here (no process pool for one picture)
     workers = workers_from_env()
@@ -46,8 +64,7 @@ def take_screenshot(
                                    state.gh, tab, state.tilt).query()  # fmt: skip
     try:
         w, h = size
-        profile_root = Path("build") / "chromium"
-        with browser_context(w, h, profile_root) as ctx:
+        with browser_context(w, h, profile_root()) as ctx:
             page = ctx.new_page()
             page.goto(url)
             page.get_by_text("CMC (°)").first.wait_for(timeout=timeout_s * 1000)
@@ -57,6 +74,8 @@ def take_screenshot(
                 if s.client.client_id not in before:
                     session = s
             wait_drawn(page, session.client, timeout_s)
+            if wait_sgas:
+                wait_sgas_complete(session, sgas_timeout_s)
             if view == "map":
                 page.get_by_role("tab", name="Map").click()
                 session.map_panel.refresh()
@@ -76,6 +95,19 @@ def take_screenshot(
     return out
 
 
+def wait_sgas_complete(session: Session, timeout_s: float) -> None:
+    """Block until the tab's Live S_GAS snapshot is complete (or raise ``TimeoutError``)."""
+    t_end = time.monotonic() + timeout_s
+    while time.monotonic() < t_end:
+        last = session.score_panel.last
+        if last is not None and last.state == "complete":
+            return
+        if last is not None and last.state.startswith("error"):
+            raise HandbenchError(f"S_GAS failed: {last.state}")
+        time.sleep(0.1)
+    raise TimeoutError(f"S_GAS did not complete in {timeout_s:g} s (use --no-wait)")
+
+
 def screenshot_cli(args: argparse.Namespace) -> int:
     """Entry point of ``handbench screenshot`` (flags parsed in ``app.cli``)."""
     size = parse_size(args.size)
@@ -84,7 +116,10 @@ def screenshot_cli(args: argparse.Namespace) -> int:
                      tilt=None if tilt in (None, "ulnar") else tilt)  # fmt: skip
     t0 = time.perf_counter()
     try:
-        out = take_screenshot(Path(args.out), state, size, args.view, args.store)
+        out = take_screenshot(
+            Path(args.out), state, size, args.view, args.store,
+            wait_sgas=not getattr(args, "no_wait", False),
+        )  # fmt: skip
     except TimeoutError as e:
         raise HandbenchError(f"the explorer page did not become ready: {e}") from None
     print(f"wrote {out} ({size[0]}x{size[1]}, {time.perf_counter() - t0:.1f} s)", file=sys.stderr)

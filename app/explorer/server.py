@@ -7,9 +7,12 @@ background for tests and the screenshot command.
 from __future__ import annotations
 
 import os
+import signal
 import threading
 import time
 from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
+from multiprocessing import get_context
 from pathlib import Path
 
 import viser
@@ -25,21 +28,64 @@ WORKERS_ENV = "HANDBENCH_EXPLORER_WORKERS"
 """Processes for the S_GAS computation; 0 runs it in a thread of the server."""
 
 
+def _ignore_sigint() -> None:
+    """Pool workers leave Ctrl-C to the server (which then stops them): no traceback per
+    worker in the terminal."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 class _SharedLocalExecutor(LocalExecutor):
-    """A process pool shared by the tabs (pool creation guarded against a race)."""
+    """A process pool shared by the tabs (pool creation guarded against a race); closing
+    it ends its workers at once instead of waiting for their running tasks."""
 
     def __init__(self, workers: int | None = None) -> None:
         super().__init__(workers)
         self._create_lock = threading.Lock()
 
-    def _get_pool(self):  # type: ignore[override]  # noqa: ANN202
+    def _get_pool(self) -> ProcessPoolExecutor:
         with self._create_lock:
-            return super()._get_pool()
+            if self._pool is None:
+                self._pool = ProcessPoolExecutor(
+                    self.workers, mp_context=get_context("spawn"), initializer=_ignore_sigint
+                )
+            return self._pool
+
+    def worker_pids(self) -> list[int]:
+        """Process ids of the pool's workers (none before the first computation)."""
+        pool = self._pool
+        procs = getattr(pool, "_processes", None) or {}
+        return [p.pid for p in procs.values() if p.pid is not None]
+
+    def close(self) -> None:
+        with self._create_lock:
+            pool, self._pool = self._pool, None
+        if pool is None:
+            return
+        procs = list((getattr(pool, "_processes", None) or {}).values())
+        pool.shutdown(wait=False, cancel_futures=True)
+        for proc in procs:  # a task may run for seconds: do not wait for it
+            proc.terminate()
+        for proc in procs:
+            proc.join(timeout=5.0)
 
 
 def _objects_from_env() -> tuple[str, ...]:
     env = os.environ.get(OBJECTS_ENV, "").strip()
     return tuple(k.strip() for k in env.split(",") if k.strip()) if env else OBJECT_KEYS
+
+
+def release_memory() -> None:
+    """Hand freed heap back to the OS (glibc ``malloc_trim``; a no-op elsewhere).
+
+    A tab's numpy and mesh buffers are freed when it closes, but glibc keeps freed pages in
+    the arenas of the threads that used them (viser runs callbacks on a thread pool), so the
+    server's RSS would stay at its peak without this."""
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
 
 
 def workers_from_env() -> int | None:
@@ -99,6 +145,11 @@ class ExplorerServer:
             s = self.sessions.pop(client.client_id, None)
         if s is not None:
             s.close()
+            del s
+            import gc
+
+            gc.collect()  # sessions sit in reference cycles (handles <-> callbacks)
+            release_memory()
 
     def wait_for_session(self, timeout: float = 30.0, count: int = 1) -> list[Session]:
         """Block until ``count`` tabs are connected and have drawn their first scene."""
@@ -131,17 +182,24 @@ def serve(
     objects: Sequence[str] | None = None,
     workers: int | None = None,
 ) -> None:
-    """Run the explorer until Ctrl-C."""
+    """Run the explorer until Ctrl-C or SIGTERM; either stops everything it started (the
+    sessions' workers, the process pool, the share tunnel, the server)."""
     srv = ExplorerServer(host, port, store_path, objects=objects, workers=workers)
+    stop = threading.Event()
+
+    def on_signal(signum: int, _frame: object) -> None:
+        stop.set()
+
+    previous = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGTERM, signal.SIGINT)}
     print(f"handbench explorer: open {srv.url} in a browser (Ctrl-C stops)", flush=True)
     if host in ("0.0.0.0", "::"):
         print("listening on every interface: other machines use http://<this machine's IP>:"
               f"{srv.viser.get_port()}", flush=True)  # fmt: skip
     print(f"results store: {srv.store.path}", flush=True)
     try:
-        while True:
-            time.sleep(3600)
-    except KeyboardInterrupt:
-        pass
+        stop.wait()
     finally:
+        print("handbench explorer: stopping", flush=True)
         srv.stop()
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)

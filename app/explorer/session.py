@@ -12,11 +12,11 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 import viser
 
 from app.errors import HandbenchError
 from app.explorer import url_state
+from app.explorer.input_commit import commit_script_html
 from app.explorer.live_score import ScoreWorker
 from app.explorer.panel_design import DesignPanel
 from app.explorer.panel_import import ImportPanel
@@ -27,6 +27,7 @@ from app.explorer.panel_share import SharePanel, request_share_url
 from app.explorer.scene_hand import HandView
 from app.explorer.scene_object import ObjectView
 from app.explorer.units import MM
+from app.explorer.views import DEFAULT_VIEW, VIEWS, camera_pose
 from app.model.design import BASELINE, ThumbDesign
 from app.model.hand.model import Hand, build_hand
 from app.model.objects import available_keys, load_object
@@ -43,6 +44,10 @@ from app.sim.replay import Replay, replay
 from app.sim.simulate import HandKit, base_kit
 
 REPLAY_HZ = 30.0
+LINK_TIMEOUT_S = 60.0
+"""How long a new tab may take to report its link (retried requests, busy browsers)."""
+GHOST_HOLD_S = 4.0
+"""The previous design's thumb stays as a ghost this long after the last design change."""
 
 
 @dataclass
@@ -103,6 +108,9 @@ class Session:
         self._req_lock = threading.Lock()
         self._req: ThumbDesign | None = None
         self._busy = False
+        self._ghost_timer: threading.Timer | None = None
+        self.link_error: str | None = None
+        """Why this tab's link was not applied (None: applied, or no link)."""
 
         self._setup_scene()
         self._setup_gui()
@@ -127,20 +135,28 @@ class Session:
         scene.add_light_ambient("/lights/ambient", intensity=0.9)
         scene.add_light_directional("/lights/key", intensity=2.2, wxyz=(0.88, 0.28, 0.36, 0.0))
         scene.add_light_directional("/lights/fill", intensity=0.8, wxyz=(0.5, -0.5, 0.5, 0.5))
-        scene.add_grid("/floor", width=0.5, height=0.5, cell_size=0.02, section_size=0.1)
+        self.floor = scene.add_grid(
+            "/floor", width=0.5, height=0.5, cell_size=0.02, section_size=0.1
+        )
         self.hand_view = HandView(scene, self.hand)
+        self.ghost = HandView(scene, self.hand, "/ghost", prefix="thumb", ghost=True)
         self.object_view = ObjectView(scene)
 
     def _setup_gui(self) -> None:
         gui = self.client.gui
         gui.configure_theme(control_width="large")
         gui.add_markdown("**handbench** design explorer")
+        gui.add_html(commit_script_html())
+        # object and view above the tabs: reachable from the design and the grasp replays
+        keys = available_keys()
+        self.object_dd = gui.add_dropdown("Object", options=keys, initial_value=self.object_key)
+        self.object_dd.on_update(lambda _: self.on_object(self.object_dd.value))
+        self.view_dd = gui.add_dropdown("View", options=VIEWS, initial_value=DEFAULT_VIEW)
+        self.view_dd.on_update(lambda _: self.frame_camera())
         tabs = gui.add_tab_group()
         with tabs.add_tab("Design", viser.Icon.HAND_FINGER):
             self.design_panel = DesignPanel(gui, self.on_design, self.hand_view.set_axes_visible)
-            keys = available_keys()
-            self.object_dd = gui.add_dropdown("Object", options=keys, initial_value=self.object_key)
-            self.object_dd.on_update(lambda _: self.on_object(self.object_dd.value))
+            self.hand_view.set_axes_visible(self.design_panel.axes.value)
             with gui.add_folder("Live S_GAS"):
                 self.score_panel = ScorePanel(gui)
             with gui.add_folder("Import a mesh", expand_by_default=False):
@@ -171,10 +187,11 @@ class Session:
         """Read the link state of this tab, draw the first scene, start the S_GAS worker."""
         state = url_state.UrlState()
         try:
-            search = self._read_probe(timeout_s=5.0)
+            search = self._read_probe(timeout_s=LINK_TIMEOUT_S)
             if search:
                 state = url_state.parse_query(search)
         except (TimeoutError, RuntimeError, HandbenchError) as e:
+            self.link_error = str(e)
             self.notify("Link not applied", str(e))
         self._probe.remove()
         if self._closed:
@@ -182,15 +199,23 @@ class Session:
         try:
             self.apply_state(state)
         except HandbenchError as e:
+            self.link_error = str(e)
             self.notify("Link not applied", str(e))
             self.apply_state(url_state.UrlState())
         self.ready.set()
 
     def _read_probe(self, timeout_s: float) -> str | None:
-        """Poll this tab's localStorage for the link query the probe writes."""
+        """Poll this tab's localStorage for the link query the probe writes.
+
+        Many tabs opening at once keep the browser busy (software WebGL) for many seconds:
+        one request timing out is retried until ``timeout_s`` has passed in all."""
         t_end = time.monotonic() + timeout_s
         while time.monotonic() < t_end and not self._closed:
-            v = self.client.local_storage.get_item(self._probe_key, timeout=timeout_s)
+            left = max(t_end - time.monotonic(), 0.1)
+            try:
+                v = self.client.local_storage.get_item(self._probe_key, timeout=min(left, 10.0))
+            except TimeoutError:
+                continue
             if v is not None:
                 self.client.local_storage.remove_item(self._probe_key)
                 return v
@@ -243,6 +268,8 @@ class Session:
     def _apply_design(self, design: ThumbDesign) -> None:
         t0 = time.perf_counter()
         self._stop_player()
+        if design != self.design:
+            self._show_ghost()
         self.design = design
         self.hand = build_hand(design.cmc_deg, design.mcp_deg, cmc_tilt=design.cmc_tilt)
         self.kit = HandKit(self.hand)
@@ -251,14 +278,14 @@ class Session:
             self.hand_view.set_pose(self.hand, T, q)
         self.client.flush()
         t1 = time.perf_counter()
+        self.map_panel.set_tilt(design.cmc_tilt)
+        self.map_panel.set_current(design.cmc_deg, design.mcp_deg)  # the star first: ~1 ms
         self._show_final()
         t2 = time.perf_counter()
         self.timings.hand_redraw.append(t1 - t0)
         self.timings.grasp_redraw.append(t2 - t0)
         self.worker.request(design, self.settings)
         self._refresh_outcomes()
-        self.map_panel.set_tilt(design.cmc_tilt)
-        self.map_panel.set_current(design.cmc_deg, design.mcp_deg)
         self.share_panel.update_link()
 
     def on_object(self, key: str) -> None:
@@ -270,20 +297,24 @@ class Session:
             self.frame_camera()
 
     def _set_object(self, key: str, redraw: bool) -> None:
+        """Every control that depends on the object first (GH range, filters, outcomes),
+        then the scene, in one batch: no frame shows the old object's grasp on the new one."""
         self._stop_player()
-        self.object_key = key
-        self.obj = load_object(key)
-        self.hyps = cached_hypotheses(key)
-        self.gh = min(self.gh, len(self.hyps) - 1)
-        if self.object_dd.value != key:
-            self.object_dd.value = key
-        self.object_view.set_object(self.obj.mesh.vertices, self.obj.mesh.faces)
-        self.replay_panel.set_hypotheses(self.hyps)
-        self.replay_panel.select_index(self.gh)
-        self._refresh_outcomes()
-        if redraw:
-            self._show_final()
-            self.share_panel.update_link()
+        self._hide_ghost()
+        obj, hyps = load_object(key), cached_hypotheses(key)
+        with self.client.atomic():
+            self.object_key, self.obj, self.hyps = key, obj, hyps
+            self.gh = min(self.gh, len(hyps) - 1)
+            if self.object_dd.value != key:
+                self.object_dd.value = key
+            self.replay_panel.set_hypotheses(hyps)
+            self.replay_panel.select_index(self.gh)
+            self._refresh_outcomes()
+            self.object_view.set_object(obj.mesh.vertices, obj.mesh.faces)
+            self.object_view.set_contacts(None)
+            if redraw:
+                self._show_final()
+                self.share_panel.update_link()
 
     def on_gh(self, i: int) -> None:
         """GH slider / filters."""
@@ -296,6 +327,7 @@ class Session:
     def on_mode(self, mode: str) -> None:
         """Closing mode: changes the simulation settings (and so the stored results used)."""
         with self.lock:
+            self._stop_player()
             self.mode = mode
             self._show_final()
             self.worker.request(self.design, self.settings)
@@ -326,6 +358,7 @@ class Session:
                 g.T_object_palm, self.hand.approach_point_palm, self.obj.spec.setup.hand_vector_palm
             )
             self.object_view.set_contacts(g.contacts)
+            self._place_floor()
             self.replay_panel.stage.content = "final grasp"
             self.replay_panel.result.content = outcome_markdown(
                 out, self.hyps.ids[i], len(g.contacts)
@@ -347,31 +380,63 @@ class Session:
             self._player.start()
 
     def _play(self, rep: Replay, hand: Hand, cancel: threading.Event) -> None:
-        self.object_view.set_contacts(None)
+        """Draw the frames at REPLAY_HZ. Each frame is drawn under the session lock after a
+        cancel check, and every handler cancels under that lock: once a handler (a new
+        object, design or GH) has run, no frame of the old replay reaches the scene."""
+        with self.lock:
+            if cancel.is_set():
+                return
+            self.object_view.set_contacts(None)
+        hand_vector = self.obj.spec.setup.hand_vector_palm
         period = 1.0 / REPLAY_HZ
         t_next = time.perf_counter()
         for f in rep.frames:
-            if cancel.is_set() or self._closed:
-                return
-            with self.client.atomic():
-                self.hand_view.set_pose(hand, f.T_object_palm, f.q)
-                self.object_view.set_palm_point(
-                    f.T_object_palm, hand.approach_point_palm, self.obj.spec.setup.hand_vector_palm
-                )
-                self.replay_panel.stage.content = f"replay: {f.label}"
+            with self.lock:
+                if cancel.is_set() or self._closed:
+                    return
+                with self.client.atomic():
+                    self.hand_view.set_pose(hand, f.T_object_palm, f.q)
+                    self.object_view.set_palm_point(
+                        f.T_object_palm, hand.approach_point_palm, hand_vector
+                    )
+                    self.replay_panel.stage.content = f"replay: {f.label}"
             self.client.flush()
             t_next += period
             time.sleep(max(0.0, t_next - time.perf_counter()))
-        if not cancel.is_set():
-            self.object_view.set_contacts(rep.grasp.contacts)
-            self.replay_panel.stage.content = "final grasp"
+        with self.lock:
+            if not cancel.is_set() and not self._closed:
+                self.object_view.set_contacts(rep.grasp.contacts)
+                self.replay_panel.stage.content = "final grasp"
 
     def _stop_player(self) -> None:
+        """Cancel the replay (callers hold ``self.lock``, so it draws no further frame)."""
         self._player_cancel.set()
-        p = self._player
-        if p is not None and p is not threading.current_thread():
-            p.join(timeout=1.0)
         self._player = None
+
+    # ------------------------------------------------------------------ ghost
+    def _show_ghost(self) -> None:
+        """Keep the current thumb as a translucent ghost while the design changes."""
+        if not self.ghost.visible:
+            with self.client.atomic():
+                self.ghost.set_pose(self.hand, self.hand_view.T_object_palm, self.hand_view.q)
+                self.ghost.set_visible(True)
+        if self._ghost_timer is not None:
+            self._ghost_timer.cancel()
+        self._ghost_timer = threading.Timer(GHOST_HOLD_S, self._hide_ghost)
+        self._ghost_timer.daemon = True
+        self._ghost_timer.start()
+
+    def _hide_ghost(self) -> None:
+        if self._ghost_timer is not None:
+            self._ghost_timer.cancel()
+            self._ghost_timer = None
+        if self.ghost.visible and not self._closed:
+            self.ghost.set_visible(False)
+
+    def _place_floor(self) -> None:
+        """The floor grid just under the lowest point of the hand and the object."""
+        z = min(float(self.obj.mesh.bounds[0, 2]), float(self.hand_view.points_mm()[:, 2].min()))
+        self.floor.position = (0.0, 0.0, (z - 12.0) * MM)
 
     # ------------------------------------------------------------------ scores
     def _object_scored(self, key: str) -> None:
@@ -391,29 +456,17 @@ class Session:
 
     # ------------------------------------------------------------------ view
     def frame_camera(self) -> None:
-        """Frame the object and the hand, seen from the hand's radial (thumb) side, a little
-        from above and from the back of the hand, so the thumb and the grasp are visible."""
-        T = self.hand_view.T_object_palm
-        T_links = T[None] @ self.hand.link_poses(self.hand_view.q)
-        allp = np.vstack([self.obj.mesh.bounds, T_links[:, :3, 3]])
-        lo, hi = allp.min(axis=0), allp.max(axis=0)
-        centre = (lo + hi) / 2
-        radius = float(np.linalg.norm(hi - lo)) / 2 + 30.0
-        R = T[:3, :3]
-        if self.obj.spec.grasp_type == "CG":  # from above the back of the hand: the wrap
-            view = R @ np.array([0.7, -0.2, -0.8]) + np.array([0.0, 0.0, 1.0])
-        else:  # pinch: from the thumb side, at the height of the pads
-            view = R @ np.array([1.0, -0.25, -0.15]) + np.array([0.0, 0.0, 0.35])
-        view /= np.linalg.norm(view)
-        up = np.array([0.0, 0.0, 1.0])
-        right = np.cross(-view, up)
-        right /= max(float(np.linalg.norm(right)), 1e-9)
-        # the panel covers the right of the page: aim a little right so the grasp sits left
-        target = centre + right * 0.35 * radius
+        """Point the camera as the View dropdown says (views.py: from the palmar-radial
+        side, so the thumb and its opposition are in sight)."""
+        hv = self.hand_view
+        pose = camera_pose(
+            self.view_dd.value, hv.T_object_palm, hv.points_mm("thumb"), hv.points_mm(),
+            self.obj.mesh.bounds,
+        )  # fmt: skip
         cam = self.client.camera
-        cam.up_direction = tuple(up)
-        cam.position = tuple((target + view * radius * 2.0) * MM)
-        cam.look_at = tuple(target * MM)  # after position: position moves look_at along
+        cam.up_direction = tuple(pose.up)
+        cam.position = tuple(pose.position * MM)
+        cam.look_at = tuple(pose.look_at * MM)  # after position: position moves look_at along
 
     def state_query(self) -> str:
         """The link query of the current state."""
@@ -432,5 +485,7 @@ class Session:
     def close(self) -> None:
         """The tab closed: cancel and free its work."""
         self._closed = True
-        self._stop_player()
+        self._player_cancel.set()
+        if self._ghost_timer is not None:
+            self._ghost_timer.cancel()
         self.worker.close()

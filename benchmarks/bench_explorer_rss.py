@@ -1,0 +1,117 @@
+"""Server memory over a session: open 8 explorer tabs at once, close them, 10 times; print the
+server's RSS (and its children's) after each round. Issue: RSS returns to within 10 % of its
+starting level after the tabs close.
+
+Usage: PYTHONPATH=. .venv/bin/python benchmarks/bench_explorer_rss.py [--tabs 8] [--rounds 10]
+
+The server is ``handbench serve`` in a subprocess (port 0, a fresh store under build/, the
+S_GAS panel on chips_can only and computed in a thread, so the figures are the server's own);
+it is stopped with SIGTERM at the end, and the script checks nothing it started is left.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def rss_mb(pid: int) -> float:
+    """Resident set size of ``pid`` (MB), from /proc."""
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024
+    return 0.0
+
+
+def children(pid: int) -> list[int]:
+    """Direct child processes of ``pid``."""
+    try:
+        text = Path(f"/proc/{pid}/task/{pid}/children").read_text()
+    except OSError:
+        return []
+    return [int(p) for p in text.split()]
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    ap.add_argument("--tabs", type=int, default=8)
+    ap.add_argument("--rounds", type=int, default=10)
+    ap.add_argument("--settle", type=float, default=3.0, help="seconds after closing the tabs")
+    args = ap.parse_args()
+
+    from app.explorer.browser import browser_context
+
+    build = ROOT / "build" / "bench_rss"
+    build.mkdir(parents=True, exist_ok=True)
+    env = dict(os.environ, HANDBENCH_EXPLORER_OBJECTS="chips_can", HANDBENCH_EXPLORER_WORKERS="0")
+    env["PYTHONPATH"] = str(ROOT)
+    store = Path(tempfile.mkdtemp(dir=build)) / "store.sqlite"
+    cmd = [sys.executable, "-m", "app.cli", "serve", "--port", "0", "--store", str(store)]
+    srv = subprocess.Popen(
+        cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
+    )
+    assert srv.stdout is not None
+    url = None
+    for line in srv.stdout:
+        m = re.search(r"open (http://\S+) in a browser", line)
+        if m:
+            url = m.group(1)
+            break
+    if url is None:
+        print("the server did not start", file=sys.stderr)
+        return 1
+    time.sleep(1.0)
+    start = rss_mb(srv.pid)
+    print(f"server pid {srv.pid} at {url}; RSS at start {start:.0f} MB", flush=True)
+    rows = []
+    try:
+        with browser_context(900, 600, build / "profiles") as ctx:
+            for r in range(args.rounds):
+                t0 = time.perf_counter()
+                pages = [ctx.new_page() for _ in range(args.tabs)]
+                for k, page in enumerate(pages):
+                    page.goto(f"{url}/?cmc=0&mcp={45 + 5 * (k % 4)}", wait_until="commit")
+                for page in pages:
+                    page.get_by_text("CMC (°)", exact=True).wait_for(timeout=120_000)
+                opened = rss_mb(srv.pid)
+                for page in pages:
+                    page.close()
+                time.sleep(args.settle)
+                closed = rss_mb(srv.pid)
+                rows.append((r + 1, opened, closed, time.perf_counter() - t0))
+                print(
+                    f"round {r + 1:2d}: {args.tabs} tabs open {opened:6.0f} MB, "
+                    f"closed {closed:6.0f} MB ({time.perf_counter() - t0:.1f} s)",
+                    flush=True,
+                )
+    finally:
+        kids = children(srv.pid)
+        srv.send_signal(signal.SIGTERM)
+        try:
+            srv.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            srv.kill()
+            print("the server ignored SIGTERM", file=sys.stderr)
+        left = [p for p in kids if Path(f"/proc/{p}").exists()]
+        print(f"after SIGTERM: server exit code {srv.returncode}; children left: {left}")
+    warm = rows[0][2]
+    last = rows[-1][2]
+    print(
+        f"RSS after closing: first round {warm:.0f} MB, last round {last:.0f} MB "
+        f"({100 * (last - warm) / warm:+.1f} % vs the first round, "
+        f"{100 * (last - start) / start:+.1f} % vs the idle start)"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
