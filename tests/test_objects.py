@@ -267,3 +267,25 @@ def test_import_fixes_flipped_faces(tmp_path: Path) -> None:
     o = import_object(p, like="washer", register=False)
     assert o.mesh.is_winding_consistent and o.mesh.volume == pytest.approx(6000.0)
     assert o.sdf(np.array([[0.0, 0.0, 0.0]]))[0] == pytest.approx(-5.0)
+
+
+def test_orientation_up_axis_is_the_shortest_turn() -> None:
+    from app.model.objects.importer import orientation_matrix
+
+    R = orientation_matrix("+y")
+    assert np.allclose(R @ [0, 1, 0], [0, 0, 1]) and np.allclose(R @ [1, 0, 0], [1, 0, 0])
+    assert np.allclose(orientation_matrix("-z") @ [0, 0, -1], [0, 0, 1])
+    with pytest.raises(MeshImportError, match=r"\+x"):
+        orientation_matrix("w")
+
+
+def test_target_normal_is_averaged_over_a_patch(tmp_path: Path) -> None:
+    """A coarse, noisy cylinder: one triangle's normal is off; the patch mean is radial."""
+    rng = np.random.default_rng(3)
+    c = trimesh.creation.cylinder(radius=50.0, height=140.0, sections=48)
+    c.vertices += rng.normal(0, 0.4, c.vertices.shape)
+    p = _write(tmp_path / "can.ply", c)
+    o = import_object(p, like="coffee_can", register=False)
+    t, n = o.spec.target_object, o.spec.normal_object
+    radial = np.array([t[0], t[1], 0.0]) / np.hypot(t[0], t[1])
+    assert np.degrees(np.arccos(np.clip(n @ radial, -1, 1))) < 3.0
