@@ -35,3 +35,8 @@ class UnknownHypothesisError(HandbenchError, KeyError):
 
     def __str__(self) -> str:
         return str(self.args[0]) if self.args else ""
+
+
+class WorkerCrashError(HandbenchError):
+    """A worker process died (segfault, out of memory, killed) while simulating; the message
+    names the object and the hypothesis it was on. Finished tasks stay in the store."""
