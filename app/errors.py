@@ -39,3 +39,8 @@ class UnknownHypothesisError(HandbenchError, KeyError):
 
 class TableError(HandbenchError, ValueError):
     """A score table (ours or a reference) that cannot be read or lacks needed columns."""
+
+
+class WorkerCrashError(HandbenchError):
+    """A worker process died (segfault, out of memory, killed) while simulating; the message
+    names the object and the hypothesis it was on. Finished tasks stay in the store."""

@@ -23,7 +23,6 @@ FORMS = r"comma list .*start:stop:step"
         ("0,15,30,45", [0.0, 15.0, 30.0, 45.0]),
         ("0, 15 ,30", [0.0, 15.0, 30.0]),  # spaces around items
         ("7.5", [7.5]),
-        ("0,15,", [0.0, 15.0]),  # a trailing comma is ignored
         ("0:45:5", [float(v) for v in range(0, 46, 5)]),  # stop included
         ("0:90:15", [0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 90.0]),
         ("45:45:5", [45.0]),  # start == stop: one value
@@ -44,6 +43,19 @@ def test_parse_angle_list_bad_input_lists_the_forms(text: str) -> None:
     with pytest.raises(SettingsError, match=FORMS) as e:
         parse_angle_list(text, "mcp")
     assert "--mcp" in str(e.value) and repr(text) in str(e.value)
+
+
+@pytest.mark.parametrize("text", ["0,,15", "0,15,", ",15"])
+def test_parse_angle_list_empty_item_refused(text: str) -> None:
+    with pytest.raises(SettingsError, match=r"item \d is empty"):
+        parse_angle_list(text, "cmc")
+
+
+def test_parse_angle_list_range_count_capped() -> None:
+    with pytest.raises(SettingsError, match="at most 100000") as e:
+        parse_angle_list("0:90:1e-9", "mcp")
+    assert "step of at least" in str(e.value)
+    assert len(parse_angle_list("0:99999:1", "mcp")) == 100_000  # the cap itself is allowed
 
 
 @pytest.mark.parametrize("text", ["", ",", " , "])

@@ -162,7 +162,8 @@ def test_import_box_in_metres(tmp_path: Path) -> None:
         assert o.mesh.is_watertight and o.spec.grasp_type == "CG"
         assert o.spec.setup == load_object("coffee_can").spec.setup
         assert abs(o.sdf(o.spec.target_object[None])[0]) < 1e-6
-        assert o.sdf(np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 40.0]])) == pytest.approx([-15.0, 25.0])
+        # object frame: base centre at the origin, +z up (the box spans z 0..30)
+        assert o.sdf(np.array([[0.0, 0.0, 15.0], [0.0, 0.0, 55.0]])) == pytest.approx([-15.0, 25.0])
         n = o.normal(o.spec.target_object[None])[0]
         assert n @ o.spec.normal_object > 0.99
         assert len(o.collision_objects()) == 1
@@ -213,9 +214,10 @@ def test_import_open_mesh(tmp_path: Path) -> None:
     p = _write(tmp_path / "tube.ply", open_tube)
     with pytest.raises(MeshImportError, match="not closed"):
         import_object(p, like="chips_can", register=False)
-    with pytest.warns(UserWarning, match="not closed"):
+    with pytest.warns(UserWarning, match="open; 2 larger holes were closed with flat caps"):
         o = import_object(p, like="chips_can", register=False, allow_open=True)
-    assert len(o.mesh.faces) == len(open_tube.faces)
+    assert o.mesh.is_watertight
+    assert o.mesh.volume == pytest.approx(tube.volume, rel=1e-6)  # the caps close it
     # one missing triangle is a small hole: filled, with a warning
     box = trimesh.creation.box((30.0, 30.0, 30.0))
     holed = _write(tmp_path / "holed.ply", trimesh.Trimesh(box.vertices, box.faces[1:]))
@@ -266,4 +268,26 @@ def test_import_fixes_flipped_faces(tmp_path: Path) -> None:
     p = _write(tmp_path / "flipped.ply", trimesh.Trimesh(box.vertices, faces, process=False))
     o = import_object(p, like="washer", register=False)
     assert o.mesh.is_winding_consistent and o.mesh.volume == pytest.approx(6000.0)
-    assert o.sdf(np.array([[0.0, 0.0, 0.0]]))[0] == pytest.approx(-5.0)
+    assert o.sdf(np.array([[0.0, 0.0, 5.0]]))[0] == pytest.approx(-5.0)  # base at z = 0
+
+
+def test_orientation_up_axis_is_the_shortest_turn() -> None:
+    from app.model.objects.importer import orientation_matrix
+
+    R = orientation_matrix("+y")
+    assert np.allclose(R @ [0, 1, 0], [0, 0, 1]) and np.allclose(R @ [1, 0, 0], [1, 0, 0])
+    assert np.allclose(orientation_matrix("-z") @ [0, 0, -1], [0, 0, 1])
+    with pytest.raises(MeshImportError, match=r"\+x"):
+        orientation_matrix("w")
+
+
+def test_target_normal_is_averaged_over_a_patch(tmp_path: Path) -> None:
+    """A coarse, noisy cylinder: one triangle's normal is off; the patch mean is radial."""
+    rng = np.random.default_rng(3)
+    c = trimesh.creation.cylinder(radius=50.0, height=140.0, sections=48)
+    c.vertices += rng.normal(0, 0.4, c.vertices.shape)
+    p = _write(tmp_path / "can.ply", c)
+    o = import_object(p, like="coffee_can", register=False)
+    t, n = o.spec.target_object, o.spec.normal_object
+    radial = np.array([t[0], t[1], 0.0]) / np.hypot(t[0], t[1])
+    assert np.degrees(np.arccos(np.clip(n @ radial, -1, 1))) < 3.0

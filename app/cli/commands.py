@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -14,6 +15,8 @@ if TYPE_CHECKING:
     from app.quality.settings import SimSettings
 
 from app.cli.flags import (
+    check_out_dir,
+    check_out_file,
     designs_from_args,
     objects_from_args,
     open_executor,
@@ -22,6 +25,9 @@ from app.cli.flags import (
 )
 from app.errors import SettingsError
 from app.model.design import ThumbDesign
+
+#: Picture formats ``render`` writes (matplotlib's, limited to the common ones).
+PICTURE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".pdf", ".svg")
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
@@ -35,15 +41,15 @@ def cmd_render(args: argparse.Namespace) -> int:
     from app.reports.pictures import render_hand, render_object
 
     design = ThumbDesign(args.cmc, args.mcp, args.cmc_tilt)
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    if args.object:
+        objects_from_args([args.object])
+    if args.gh is not None and not args.object:
+        raise SettingsError("--gh needs --object")
+    settings = settings_from_args(args)
+    out = check_out_file(args.out, "--out", PICTURE_EXTENSIONS)
     if args.gh is not None:
         from app.reports.grasp_view import PICKS, pick_hypothesis, render_grasp
 
-        if not args.object:
-            raise SettingsError("--gh needs --object")
-        objects_from_args([args.object])
-        settings = settings_from_args(args)
         gh: str | int = args.gh
         if args.gh in PICKS:
             with open_store(args) as store:
@@ -52,7 +58,6 @@ def cmd_render(args: argparse.Namespace) -> int:
             gh = int(args.gh)
         print(render_grasp(out, design, args.object, gh, settings))
     elif args.object:
-        objects_from_args([args.object])
         render_object(out, args.object, cmc_deg=design.cmc_deg, mcp_deg=design.mcp_deg)
     else:
         render_hand(out, design.cmc_deg, design.mcp_deg)
@@ -138,8 +143,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     designs = designs_from_args(args)
     names = objects_from_args(args.object)
     settings = settings_from_args(args)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = check_out_dir(args.out, "--out")
     t0 = time.perf_counter()
     with open_store(args) as store:
         with open_executor(args) as ex:
@@ -189,13 +193,11 @@ def cmd_bruteforce(args: argparse.Namespace) -> int:
     designs = designs_from_args(args)
     names = objects_from_args(args.object)
     settings = settings_from_args(args)
-    if args.max_grasps < 1:
-        raise SettingsError(f"--max-grasps must be >= 1, got {args.max_grasps}")
+    out = check_out_dir(args.out, "--out")
     hset = "brute_force_nodup" if args.drop_duplicate_roll else "brute_force"
     gqm = GQMSettings(
         mu=settings.fc.mu, n_edges=settings.fc.n_edges, wrench_contacts=args.wrench_contacts
     )
-    out = Path(args.out)
     t0 = time.perf_counter()
     with open_store(args) as store:
         with open_executor(args) as ex:
@@ -232,32 +234,62 @@ def cmd_bruteforce(args: argparse.Namespace) -> int:
     return 0
 
 
+def _parse_rotate(text: str | None) -> tuple[float, float, float] | None:
+    if text is None:
+        return None
+    try:
+        a = tuple(float(x) for x in text.split(","))
+    except ValueError:
+        a = ()
+    if len(a) != 3 or not all(math.isfinite(x) for x in a):
+        raise SettingsError(f"--rotate takes three angles 'rx,ry,rz' in degrees, got {text!r}")
+    return a  # type: ignore[return-value]
+
+
 def cmd_objects(args: argparse.Namespace) -> int:
-    from app.model.objects import OBJECT_KEYS, import_object, load_object
+    from app.model.objects import OBJECT_KEYS, available_keys, import_object, load_object
+    from app.model.objects.importer import user_objects_dir
 
     if args.objects_cmd == "import":
+        rotate = _parse_rotate(args.rotate)
+        folder = check_out_dir(args.save_to or str(user_objects_dir()), "--save-to")
         obj = import_object(
-            args.path, like=args.like, units=args.units, key=args.key, save_to=args.save_to
+            args.path,
+            like=args.like,
+            units=args.units,
+            key=args.key,
+            allow_open=args.allow_open,
+            save_to=folder,
+            up=args.up,
+            rotate_deg=rotate,
         )
         b = obj.mesh.bounds
         print(
             f"imported {obj.spec.key} ({args.path}) like {args.like}: "
-            f"{len(obj.mesh.faces)} faces, size {(b[1] - b[0]).round(1).tolist()} mm"
+            f"{len(obj.mesh.faces)} faces, size {(b[1] - b[0]).round(1).tolist()} mm, "
+            f"saved in {folder}"
         )
         return 0
-    for k in OBJECT_KEYS:
+    for k in available_keys():
         o = load_object(k)
         b = o.mesh.bounds
+        src = (
+            ""
+            if k in OBJECT_KEYS
+            else f"  (from {o.spec.shape.get('imported_from', o.spec.source)})"
+        )
         print(
             f"{k:<14} {o.spec.grasp_type}  N_GH {o.spec.setup.n_gh:>5}  "
-            f"size {(b[1] - b[0]).round(1).tolist()} mm  {o.spec.name}"
+            f"size {(b[1] - b[0]).round(1).tolist()} mm  {o.spec.name}{src}"
         )
     return 0
 
 
 def cmd_screenshot(args: argparse.Namespace) -> int:
-    from app.explorer.screenshot import screenshot_cli
+    from app.explorer.screenshot import parse_size, screenshot_cli
 
+    parse_size(args.size)
+    check_out_file(args.out, "--out", (".png", ".jpg", ".jpeg"))
     return screenshot_cli(args)
 
 

@@ -91,26 +91,102 @@ def add_design_flags(parser: argparse.ArgumentParser, required: bool = True) -> 
     )
 
 
+#: Most values an angle list or range may give (a typo such as a step of 1e-9 would
+#: otherwise allocate billions of designs before anything starts).
+MAX_LIST_VALUES = 100_000
+
+
 def parse_angle_list(text: str, name: str) -> list[float]:
     """'0,15,30' or a range with a step 'start:stop:step' (stop included) -> degrees.
 
     Range values are rounded to 1e-9° so that '0:0.3:0.1' gives exactly 0.3 (the same design
-    key as a typed 0.3)."""
+    key as a typed 0.3). Empty list items ('0,,15', '0,15,') and ranges of more than
+    ``MAX_LIST_VALUES`` values raise ``SettingsError``."""
     forms = f"--{name} takes a comma list ('0,15,30') or start:stop:step ('0:45:5')"
+    if ":" not in text:
+        items = [x.strip() for x in text.split(",")]
+        if not any(items):
+            raise SettingsError(f"--{name} is empty; {forms}")
+        if not all(items):
+            k = items.index("") + 1
+            raise SettingsError(f"--{name} {text!r}: item {k} is empty; {forms}")
     try:
         if ":" in text:
             a, b, s = (float(x) for x in text.split(":"))
             if not all(math.isfinite(x) for x in (a, b, s)) or s <= 0 or b < a:
                 raise ValueError
-            n = int(math.floor((b - a) / s + 1e-9))
-            vals = [round(a + k * s, 9) for k in range(n + 1)]
+            n = int(math.floor((b - a) / s + 1e-9)) + 1
         else:
-            vals = [float(x) for x in text.split(",") if x.strip()]
+            vals = [float(x) for x in text.split(",")]
+            if not all(math.isfinite(v) for v in vals):
+                raise ValueError
+            return vals
     except ValueError:
         raise SettingsError(f"{forms}, got {text!r}") from None
-    if not vals:
-        raise SettingsError(f"--{name} is empty; {forms}")
+    if n > MAX_LIST_VALUES:
+        raise SettingsError(
+            f"--{name} {text!r} gives {n:.3g} values; at most {MAX_LIST_VALUES} are "
+            f"allowed: use a step of at least {(b - a) / (MAX_LIST_VALUES - 1):.3g}"
+        )
+    vals = [round(a + k * s, 9) for k in range(n)]
     return vals
+
+
+def int_at_least(low: int, high: int | None = None):  # noqa: ANN201
+    """An argparse ``type`` accepting integers in [low, high] (high None: no upper bound)."""
+
+    def parse(text: str) -> int:
+        rng = f">= {low}" if high is None else f"in [{low}, {high}]"
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be an integer {rng}, got {text!r}") from None
+        if v < low or (high is not None and v > high):
+            raise argparse.ArgumentTypeError(f"must be an integer {rng}, got {v}")
+        return v
+
+    parse.__name__ = "int"
+    return parse
+
+
+def _probe_writable(folder: Path, flag: str) -> None:
+    """Create ``folder`` (and parents) and check a file can be written in it."""
+    import tempfile
+
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".handbench-probe-"):
+            pass
+    except OSError as e:
+        raise SettingsError(
+            f"{flag} {str(folder)!r}: cannot write there ({e.strerror or e}); "
+            "give a folder you can write to"
+        ) from None
+
+
+def check_out_dir(text: str, flag: str) -> Path:
+    """An output folder: an existing or creatable, writable folder (created here)."""
+    p = Path(text)
+    if p.exists() and not p.is_dir():
+        raise SettingsError(f"{flag} {text!r} is a file, not a folder; give a folder name")
+    _probe_writable(p, flag)
+    return p
+
+
+def check_out_file(text: str, flag: str, extensions: tuple[str, ...]) -> Path:
+    """An output file: a known extension, not a folder, in a writable (created) folder."""
+    p = Path(text)
+    known = ", ".join(extensions)
+    if not text or p.is_dir():
+        raise SettingsError(
+            f"{flag} {text!r} is a folder; give a file name ending in one of {known}"
+        )
+    if p.suffix.lower() not in extensions:
+        raise SettingsError(
+            f"{flag} {text!r}: unknown picture extension {p.suffix or '(none)'!r}; valid: {known}"
+        )
+    _probe_writable(p.parent, flag)
+    return p
 
 
 def designs_from_args(args: argparse.Namespace) -> list[ThumbDesign]:
@@ -143,14 +219,22 @@ def objects_from_args(names: list[str] | None) -> list[str]:
 
 
 def open_store(args: argparse.Namespace):  # noqa: ANN202
+    from app.errors import StoreError
     from app.runs.store import ResultStore, default_store_path
 
-    return ResultStore(Path(args.store) if args.store else default_store_path())
+    path = Path(args.store) if args.store else default_store_path()
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise StoreError(
+            f"--store {str(path)!r}: cannot create its folder ({e.strerror or e})"
+        ) from None
+    return ResultStore(path)
 
 
 def add_run_flags(s: argparse.ArgumentParser, workers_help: str) -> None:
     """Flags of every command that simulates: workers, executor, store, and the settings."""
-    s.add_argument("--workers", type=int, default=None, help=workers_help)
+    s.add_argument("--workers", type=int_at_least(1), default=None, help=workers_help + ", >= 1")
     s.add_argument(
         "--executor",
         choices=("local", "inline", "ray"),

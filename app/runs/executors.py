@@ -5,13 +5,44 @@ local process pool. (The Ray executor is ``app.runs.ray_executor``.)
 from __future__ import annotations
 
 import os
+import shutil
+import signal
+import tempfile
 import threading
 from collections.abc import Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from multiprocessing import get_context
+from pathlib import Path
+from typing import Any
 
+from app.errors import WorkerCrashError
 from app.quality.outcome import GraspOutcome
 from app.runs.tasks import Task, run_task
+
+
+def run_task_marked(task: Task, marker_dir: str) -> list[tuple[int, str, GraspOutcome]]:
+    """``run_task`` in a pool worker, writing ``<marker_dir>/<pid>`` ("object index") before
+    each hypothesis, so that the parent can name it if this process dies."""
+    marker = Path(marker_dir) / str(os.getpid())
+
+    def mark(i: int) -> None:
+        marker.write_text(f"{task.object_name} {i}")
+
+    out = run_task(task, on_hypothesis=mark)
+    marker.unlink(missing_ok=True)
+    return out
+
+
+def _describe_exit(code: int | None) -> str:
+    if code is None:
+        return "it vanished"
+    if code < 0:
+        try:
+            return f"killed by {signal.Signals(-code).name}"
+        except ValueError:
+            return f"killed by signal {-code}"
+    return f"exit code {code}"
 
 
 class Executor:
@@ -37,11 +68,19 @@ class InlineExecutor(Executor):
 
 
 class LocalExecutor(Executor):
-    """A pool of local processes (spawned: safe beside threads such as the web server)."""
+    """A pool of local processes (spawned: safe beside threads such as the web server).
+
+    A worker that dies (segfault, out of memory) ends the run with ``WorkerCrashError``
+    naming the object and hypothesis it was on; tasks finished before stay in the store.
+    """
+
+    worker_fn: Any = staticmethod(run_task_marked)
+    """The function the workers run, ``(task, marker_dir) -> results`` (tests swap it)."""
 
     def __init__(self, workers: int | None = None) -> None:
         self.workers = workers or os.cpu_count() or 1
         self._pool: ProcessPoolExecutor | None = None
+        self._markers = tempfile.mkdtemp(prefix="handbench-workers-")
 
     def _get_pool(self) -> ProcessPoolExecutor:
         if self._pool is None:
@@ -52,19 +91,58 @@ class LocalExecutor(Executor):
         pool = self._get_pool()
         pending: dict[Future, Task] = {}
         queue = list(tasks)[::-1]
+        procs: dict[int, Any] = {}
         while queue or pending:
             while queue and len(pending) < 2 * self.workers:
                 t = queue.pop()
-                pending[pool.submit(run_task, t)] = t
+                pending[pool.submit(self.worker_fn, t, self._markers)] = t
+            procs.update(getattr(pool, "_processes", None) or {})
             done, _ = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
             if cancel is not None and cancel.is_set():
                 for f in pending:
                     f.cancel()
                 return
             for f in done:
-                yield pending.pop(f), f.result()
+                t = pending.pop(f)
+                try:
+                    res = f.result()
+                except BrokenProcessPool:
+                    # keep what other workers finished, then name the crash
+                    for g in [g for g in pending if g.done() and g.exception() is None]:
+                        yield pending.pop(g), g.result()
+                    pool.shutdown(wait=False, cancel_futures=True)
+                    self._pool = None
+                    raise self._crash_error(t, procs) from None
+                yield t, res
+
+    def _crash_error(self, task: Task, procs: dict[int, Any]) -> WorkerCrashError:
+        """The error naming the object and hypothesis the dead worker was on."""
+        from app.sim.hypothesis_sets import hypotheses_of
+
+        dead = [(pid, p.exitcode) for pid, p in procs.items() if p.exitcode not in (0, None)]
+        crashed = [d for d in dead if d[1] != -signal.SIGTERM] or dead
+        where = f"object {task.object_name!r}, one of hypotheses {list(task.gh)[:5]}..."
+        how = "it died"
+        for pid, code in crashed:
+            how = _describe_exit(code)
+            marker = Path(self._markers) / str(pid)
+            if marker.is_file():
+                name, idx = marker.read_text().split()
+                try:
+                    gh_id = hypotheses_of(name, task.hypothesis_set).ids[int(idx)]
+                except Exception:  # the id is a nicety; the index is enough
+                    gh_id = "?"
+                where = f"object {name!r}, hypothesis {gh_id} (index {idx})"
+                break
+        designs = ", ".join(f"CMC {d.cmc_deg:g}° MCP {d.mcp_deg:g}°" for d in task.designs[:3])
+        return WorkerCrashError(
+            f"a worker process died ({how}) while simulating {where} for {designs}; results "
+            "finished before are kept in the store. If the object is an imported mesh, "
+            "re-import it (objects import) or report the mesh"
+        )
 
     def close(self) -> None:
         if self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
+        shutil.rmtree(self._markers, ignore_errors=True)

@@ -6,7 +6,7 @@ thumb of every listed design on it (docs/cost-model.md).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
 from app.model.design import ThumbDesign
@@ -40,8 +40,13 @@ class Task:
     """One of ``HYPOTHESIS_SETS``."""
 
 
-def run_task(task: Task) -> list[tuple[int, str, GraspOutcome]]:
+def run_task(
+    task: Task, on_hypothesis: Callable[[int], None] | None = None
+) -> list[tuple[int, str, GraspOutcome]]:
     """Simulate one task; returns (design index in task, GH id, outcome) triples.
+
+    ``on_hypothesis(i)`` is called before hypothesis index ``i`` is simulated (the process
+    pool records it, to name the hypothesis if the worker dies).
 
     Brute-force sets close all fingers, and their outcomes keep the hand placement in
     ``extra["T_object_palm"]`` (4×4 nested list, mm) for the GQMs and pictures.
@@ -53,6 +58,8 @@ def run_task(task: Task) -> list[tuple[int, str, GraspOutcome]]:
     out: list[tuple[int, str, GraspOutcome]] = []
     bf = isinstance(hyps, BruteForceHypotheses)
     for i in task.gh:
+        if on_hypothesis is not None:
+            on_hypothesis(i)
         # the open thumb (part of the approach) depends on the CMC angle only: one base
         # stage per (CMC angle, tilt), shared by every MCP angle (docs/cost-model.md), always
         # computed by the same kit (``base_kit``) whatever designs share the task

@@ -46,6 +46,9 @@ class ClosingSettings:
                 raise SettingsError(f"{name} must be non-negative with one positive, got {v}")
         if self.max_steps < 10:
             raise SettingsError(f"max_steps must be >= 10, got {self.max_steps}")
+        c = self.approach_clearance_mm
+        if not (math.isfinite(c) and 0 <= c <= 10_000):
+            raise SettingsError(f"approach_clearance_mm must be in [0, 10000] mm, got {c}")
 
     def as_dict(self) -> dict[str, object]:
         """Plain dict (for hashing and JSON)."""

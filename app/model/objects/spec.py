@@ -43,9 +43,13 @@ def data_dir() -> Path:
 
 
 def user_dir() -> Path | None:
-    """The folder of saved imported objects, ``$HANDBENCH_USER_OBJECTS``, or None when unset."""
+    """The folder of saved imported objects: ``$HANDBENCH_USER_OBJECTS``, else
+    ``$XDG_DATA_HOME/handbench/objects`` (default ``~/.local/share/handbench/objects``)."""
     env = os.environ.get("HANDBENCH_USER_OBJECTS")
-    return Path(env) if env else None
+    if env:
+        return Path(env)
+    data = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
+    return Path(data) / "handbench" / "objects"
 
 
 @dataclass(frozen=True)

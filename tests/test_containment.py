@@ -1,0 +1,52 @@
+"""A pool worker that dies fails its task with a named error; finished tasks stay stored."""
+
+from __future__ import annotations
+
+import os
+import signal
+from pathlib import Path
+
+import pytest
+
+from app.errors import WorkerCrashError
+from app.model.design import ThumbDesign
+from app.quality.outcome import GraspOutcome
+from app.quality.settings import SimSettings
+from app.runs.executors import LocalExecutor, run_task_marked
+from app.runs.keys import design_key, object_key
+from app.runs.store import ResultStore
+from app.runs.sweep import execute_tasks
+from app.runs.tasks import Task
+from app.sim.hypothesis_sets import cached_hypotheses
+
+CRASH_INDEX = 7
+
+
+def crash_at_index(task: Task, marker_dir: str) -> list[tuple[int, str, GraspOutcome]]:
+    """Like the real worker, but segfaults on hypothesis CRASH_INDEX (after marking it)."""
+    if CRASH_INDEX in task.gh:
+        (Path(marker_dir) / str(os.getpid())).write_text(f"{task.object_name} {CRASH_INDEX}")
+        os.kill(os.getpid(), signal.SIGSEGV)
+    return run_task_marked(task, marker_dir)
+
+
+class CrashingExecutor(LocalExecutor):
+    worker_fn = staticmethod(crash_at_index)
+
+
+@pytest.mark.pool
+def test_worker_crash_is_named_and_finished_tasks_stay(tmp_path: Path) -> None:
+    s = SimSettings()
+    d = ThumbDesign(0.0, 45.0)
+    tasks = [Task("washer", (0,), (d,), s), Task("washer", (CRASH_INDEX,), (d,), s)]
+    ex = CrashingExecutor(workers=1)
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        with pytest.raises(WorkerCrashError) as e:
+            execute_tasks(tasks, store, s.key(), object_key, ex, progress=False)
+        ex.close()
+        msg = str(e.value)
+        gh_id = cached_hypotheses("washer").ids[CRASH_INDEX]
+        assert "'washer'" in msg and f"index {CRASH_INDEX}" in msg and gh_id in msg
+        assert "SIGSEGV" in msg and "CMC 0° MCP 45°" in msg
+        have = store.present_ids(design_key(d), object_key("washer"), s.key())
+        assert cached_hypotheses("washer").ids[0] in have and gh_id not in have
