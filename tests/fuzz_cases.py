@@ -329,7 +329,9 @@ def fam_two_parts(d: Path, rng: np.random.Generator, i: int) -> tuple[Path, str,
     a = _box(rng, 20, 50)
     b = _box(rng, 20, 50)
     b.apply_translation([rng.uniform(60, 120), 0, 0])
-    return _export(trimesh.util.concatenate([a, b]), d / "two.stl"), "coffee_can", ()
+    both = trimesh.util.concatenate([a, b])
+    assert isinstance(both, trimesh.Trimesh)
+    return _export(both, d / "two.stl"), "coffee_can", ()
 
 
 def fam_not_a_file(d: Path, rng: np.random.Generator, i: int) -> tuple[Path, str, tuple[str, ...]]:

@@ -21,6 +21,7 @@ from app.explorer.session import ExplorerContext, Session
 from app.model.objects import OBJECT_KEYS, load_object
 from app.runs.executors import Executor, InlineExecutor, LocalExecutor
 from app.runs.store import ResultStore, default_store_path
+from app.sim.simulate import cached_kit
 
 OBJECTS_ENV = "HANDBENCH_EXPLORER_OBJECTS"
 """Comma list of object keys for the S_GAS panel and the map (default: all six)."""
@@ -148,6 +149,10 @@ class ExplorerServer:
             del s
             import gc
 
+            with self._lock:
+                idle = not self.sessions
+            if idle:  # no tab left: drop the per-design simulation kits the tabs built
+                cached_kit.cache_clear()
             gc.collect()  # sessions sit in reference cycles (handles <-> callbacks)
             release_memory()
 
