@@ -301,3 +301,15 @@ def test_compiled_engine_leaves_meshes_to_fcl() -> None:
 def test_engine_setting_is_validated() -> None:
     with pytest.raises(SettingsError, match="engine"):
         ClosingSettings(engine="warp")  # type: ignore[arg-type]
+
+
+def test_engine_enters_the_settings_key_only_when_compiled() -> None:
+    s = SimSettings()
+    compiled = _compiled(s)
+    assert compiled.key() != s.key()
+    d = s.as_dict()
+    del d["closing"]["engine"]  # type: ignore[index]
+    from app.hashing import stable_hash
+    from app.quality.settings import ENGINE_VERSION
+
+    assert s.key() == stable_hash({"engine_version": ENGINE_VERSION, **d})  # keys as before
