@@ -18,7 +18,6 @@ to FCL.
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -107,20 +106,22 @@ def _pieces_arrays(target: Any) -> ObstacleArrays | None:
     return _arrays(rows)
 
 
-_CACHE: weakref.WeakKeyDictionary[Any, ObstacleArrays | None] = weakref.WeakKeyDictionary()
+#: id(target) -> (target, arrays): objects are long-lived (``load_object`` caches them); the
+#: stored reference keeps an id from being reused while its entry exists.
+_CACHE: dict[int, tuple[Any, ObstacleArrays | None]] = {}
+_CACHE_MAX = 64
 
 
 def object_arrays(target: Any) -> ObstacleArrays | None:
     """The object's collision pieces as arrays (cached per object), or None when a piece has
     no array description (imported meshes): the caller then uses FCL."""
-    try:
-        return _CACHE[target]
-    except KeyError:
-        pass
-    except TypeError:  # not weak-referenceable
-        return _pieces_arrays(target)
+    hit = _CACHE.get(id(target))
+    if hit is not None and hit[0] is target:
+        return hit[1]
     arr = _pieces_arrays(target)
-    _CACHE[target] = arr
+    if len(_CACHE) >= _CACHE_MAX:
+        _CACHE.clear()
+    _CACHE[id(target)] = (target, arr)
     return arr
 
 

@@ -90,17 +90,19 @@ def margin(typ: int, prm: np.ndarray) -> float:
 
 
 @njit(cache=True)
-def _closest_on_simplex(S: np.ndarray, n: int, v: np.ndarray, keep: np.ndarray) -> int:
+def _closest_on_simplex(
+    S: np.ndarray, n: int, v: np.ndarray, keep: np.ndarray, wk: np.ndarray, idx: np.ndarray
+) -> int:
     """Point of conv(S[:n]) nearest the origin -> ``v``; the face used -> ``keep`` (its point
-    indices, returned count). Returns 0 if no face qualifies (cannot happen for n >= 1)."""
+    indices, returned count). Returns 0 if no face qualifies (cannot happen for n >= 1).
+    ``wk`` (9, 3) and ``idx`` (4,) are scratch."""
     best = 1e300
     nbest = 0
-    e = np.empty((3, 3))
-    G = np.empty((3, 3))
-    b = np.empty(3)
-    mu = np.empty(3)
-    c = np.empty(3)
-    idx = np.empty(4, np.int64)
+    e = wk[0:3]
+    G = wk[3:6]
+    b = wk[6]
+    mu = wk[7]
+    c = wk[8]
     for mask in range(1, 1 << n):
         m = 0
         for i in range(n):
@@ -216,6 +218,9 @@ def core_distance(
     sa = np.empty(3)
     sb = np.empty(3)
     w = np.empty(3)
+    vn = np.empty(3)
+    wk = np.empty((9, 3))
+    idx = np.empty(4, np.int64)
 
     def minkowski(dir_: np.ndarray) -> None:  # w = s_a(dir) - s_b(-dir), b frame
         for i in range(3):
@@ -254,8 +259,7 @@ def core_distance(
             break
         S[n] = w
         n += 1
-        vn = np.empty(3)
-        m = _closest_on_simplex(S, n, vn, keep)
+        m = _closest_on_simplex(S, n, vn, keep, wk, idx)
         vvn = vn[0] * vn[0] + vn[1] * vn[1] + vn[2] * vn[2]
         if vvn >= vv:  # no progress: numerical floor reached
             break
