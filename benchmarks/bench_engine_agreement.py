@@ -9,6 +9,12 @@ and the difference, the largest joint-angle difference, the fraction with identi
 events, and the time ratio (whole simulation + judge, and the closing part alone: approach
 and closing stages). It prints, it does not assert.
 
+The floor column (``--floor``) is the agreement of the FCL engine with itself when its final
+joint angles are moved by a random ±``--floor-rad`` (default 1e-7 rad) before the contacts and
+the judge: contact patches are centred on FCL's nearest point, which jumps along a link lying
+parallel to a flat face, so outcomes that flip under such a perturbation cannot be reproduced
+by any engine that is not bit-identical.
+
     python benchmarks/bench_engine_agreement.py [--stride 7] [--full] [--objects a,b]
 """
 
@@ -32,7 +38,7 @@ from app.quality.judge import judge
 from app.quality.settings import SimSettings
 from app.sim.closing import ClosingStats
 from app.sim.hypothesis_sets import cached_hypotheses
-from app.sim.simulate import base_kit, cached_kit, simulate_base, simulate_thumb
+from app.sim.simulate import Grasp, HandKit, base_kit, cached_kit, simulate_base, simulate_thumb
 
 _CLOSING_S = [0.0]
 
@@ -64,6 +70,21 @@ def _run(kit, bkit, obj, hyps, i: int, s: SimSettings) -> tuple[Any, Any, float,
     return g, out, time.perf_counter() - t0, _CLOSING_S[0] - c0
 
 
+def _perturbed_outcome(kit: HandKit, obj, g: Grasp, s: SimSettings, eps: float, seed: int):
+    """Judge ``g`` with its joint angles moved by uniform noise of ±eps rad (contacts anew)."""
+    if not g.approached:
+        return judge(g, obj, s, 0)
+    rng = np.random.default_rng(seed)
+    q = g.q + rng.uniform(-eps, eps, g.q.shape)
+    T_links = g.T_object_palm @ kit.hand.link_poses(q)
+    non_thumb = [j for j, n in enumerate(kit.names) if not n.startswith("thumb")]
+    idx = non_thumb + list(kit.chains["thumb"].link_indices)
+    cs, _ = kit.contacts(obj, T_links, idx, s)
+    thumb_distal = kit.chains["thumb"].link_indices[2]
+    gp = dataclasses.replace(g, q=q, contacts=cs, thumb_n_main_object=T_links[thumb_distal][:3, 1])
+    return judge(gp, obj, s, 0)
+
+
 def _s_gas(fc: np.ndarray, correct: np.ndarray) -> float:
     c = (fc & correct).sum()
     nc = (fc & ~correct).sum()
@@ -76,6 +97,8 @@ def main() -> None:
     ap.add_argument("--full", action="store_true", help="28 designs, every hypothesis")
     ap.add_argument("--designs", default="0/45,30/75", help="cmc/mcp pairs (default 0/45,30/75)")
     ap.add_argument("--objects", default=",".join(OBJECT_KEYS))
+    ap.add_argument("--floor", action="store_true", help="also the FCL self-agreement floor")
+    ap.add_argument("--floor-rad", type=float, default=1e-7, help="perturbation of --floor")
     a = ap.parse_args()
     if a.full:
         designs, stride = published_designs(), 1
@@ -97,12 +120,12 @@ def main() -> None:
     tot: dict[str, float] = defaultdict(float)
     print(
         f"{'object':13} {'n':>6} {'outcome=':>9} {'events=':>8} {'S_GAS fcl':>9} "
-        f"{'compiled':>9} {'diff':>6} {'max|dq|°':>9} {'speed×':>7} {'closing×':>8}"
+        f"{'compiled':>9} {'diff':>6} {'max|dq|°':>9} {'speed×':>7} {'closing×':>8} {'floor':>7}"
     )
     for key in a.objects.split(","):
         obj, hyps = load_object(key), cached_hypotheses(key)
         idx = list(range(0, len(hyps), stride))
-        res: dict[str, list[tuple[bool, bool]]] = {"fcl": [], "compiled": []}
+        res: dict[str, list[tuple[bool, bool]]] = {"fcl": [], "compiled": [], "floor": []}
         same_ev, dq_max = 0, 0.0
         t = {"fcl": 0.0, "compiled": 0.0, "fcl_c": 0.0, "compiled_c": 0.0}
         for d in designs:
@@ -113,6 +136,9 @@ def main() -> None:
                 gc, oc, tc, cc = _run(kit, bkit, obj, hyps, i, sC)
                 res["fcl"].append((of.is_fc, of.is_correct))
                 res["compiled"].append((oc.is_fc, oc.is_correct))
+                if a.floor:
+                    op = _perturbed_outcome(kit, obj, gf, sF, a.floor_rad, i)
+                    res["floor"].append((op.is_fc, op.is_correct))
                 same_ev += gf.events == gc.events
                 dq_max = max(dq_max, float(np.abs(gf.q - gc.q).max()))
                 t["fcl"] += tf
@@ -122,16 +148,18 @@ def main() -> None:
         f, c = np.array(res["fcl"]), np.array(res["compiled"])
         n = len(f)
         agree = float((f == c).all(1).mean())
+        floor = float((f == np.array(res["floor"])).all(1).mean()) if a.floor else float("nan")
         sf, sc = _s_gas(f[:, 0], f[:, 1]), _s_gas(c[:, 0], c[:, 1])
         print(
             f"{key:13} {n:6d} {100 * agree:8.2f}% {100 * same_ev / n:7.2f}% {sf:9.2f} {sc:9.2f} "
             f"{sc - sf:+6.2f} {np.degrees(dq_max):9.4f} {t['fcl'] / t['compiled']:7.2f} "
-            f"{t['fcl_c'] / t['compiled_c']:8.2f}"
+            f"{t['fcl_c'] / t['compiled_c']:8.2f} {100 * floor:6.2f}%"
         )
         for k_ in t:
             tot[k_] += t[k_]
         tot["n"] += n
         tot["agree"] += agree * n
+        tot["floor"] += floor * n
     n = tot["n"]
     print(
         f"all objects: {n:.0f} hypothesis-designs, outcomes agree on {100 * tot['agree'] / n:.2f}%"
