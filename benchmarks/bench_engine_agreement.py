@@ -162,7 +162,8 @@ def main() -> None:
         tot["floor"] += floor * n
     n = tot["n"]
     print(
-        f"all objects: {n:.0f} hypothesis-designs, outcomes agree on {100 * tot['agree'] / n:.2f}%"
+        f"all objects: {n:.0f} hypothesis-designs, outcomes agree on "
+        f"{100 * tot['agree'] / n:.2f}% (FCL floor {100 * tot['floor'] / n:.2f}%)"
     )
     for e in ("fcl", "compiled"):
         print(
