@@ -92,7 +92,7 @@ def _s_gas(fc: np.ndarray, correct: np.ndarray) -> float:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--stride", type=int, default=7, help="every n-th hypothesis (default 7)")
     ap.add_argument("--full", action="store_true", help="28 designs, every hypothesis")
     ap.add_argument("--designs", default="0/45,30/75", help="cmc/mcp pairs (default 0/45,30/75)")
@@ -103,7 +103,8 @@ def main() -> None:
     if a.full:
         designs, stride = published_designs(), 1
     else:
-        designs = [ThumbDesign(*map(float, d.split("/"))) for d in a.designs.split(",")]
+        pairs = [[float(x) for x in d.split("/")] for d in a.designs.split(",")]
+        designs = [ThumbDesign(c, m) for c, m in pairs]
         stride = a.stride
     sF = SimSettings()
     sC = dataclasses.replace(sF, closing=dataclasses.replace(sF.closing, engine="compiled"))
@@ -120,7 +121,8 @@ def main() -> None:
     tot: dict[str, float] = defaultdict(float)
     print(
         f"{'object':13} {'n':>6} {'outcome=':>9} {'events=':>8} {'S_GAS fcl':>9} "
-        f"{'compiled':>9} {'diff':>6} {'max|dq|°':>9} {'speed×':>7} {'closing×':>8} {'floor':>7}"
+        f"{'compiled':>9} {'diff':>6} {'max|dq|°':>9} {'speed×':>7} {'closing×':>8} "
+        f"{'floor':>7} {'S_GAS fl':>8}"
     )
     for key in a.objects.split(","):
         obj, hyps = load_object(key), cached_hypotheses(key)
@@ -148,12 +150,14 @@ def main() -> None:
         f, c = np.array(res["fcl"]), np.array(res["compiled"])
         n = len(f)
         agree = float((f == c).all(1).mean())
-        floor = float((f == np.array(res["floor"])).all(1).mean()) if a.floor else float("nan")
+        p = np.array(res["floor"]) if a.floor else np.zeros((0, 2), bool)
+        floor = float((f == p).all(1).mean()) if a.floor else float("nan")
+        s_floor = _s_gas(p[:, 0], p[:, 1]) if a.floor else float("nan")
         sf, sc = _s_gas(f[:, 0], f[:, 1]), _s_gas(c[:, 0], c[:, 1])
         print(
             f"{key:13} {n:6d} {100 * agree:8.2f}% {100 * same_ev / n:7.2f}% {sf:9.2f} {sc:9.2f} "
             f"{sc - sf:+6.2f} {np.degrees(dq_max):9.4f} {t['fcl'] / t['compiled']:7.2f} "
-            f"{t['fcl_c'] / t['compiled_c']:8.2f} {100 * floor:6.2f}%"
+            f"{t['fcl_c'] / t['compiled_c']:8.2f} {100 * floor:6.2f}% {s_floor:8.2f}"
         )
         for k_ in t:
             tot[k_] += t[k_]
