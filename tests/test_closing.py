@@ -282,6 +282,7 @@ def test_close_finger_on_both_engines() -> None:
         obst = Obstacles(list(pieces), len(pieces), arrays=arrays)
         qs.append(close_finger(ch, kit.bodies("index"), T, obst, settings, st))
         events.append(st.events)
+    assert any(e.endswith("contact") for e in events[0])  # the finger meets the can
     assert events[0] == events[1]
     assert np.abs(qs[0] - qs[1]).max() < 1e-3
 
