@@ -536,6 +536,8 @@ def chain_arrays(chain: FingerChain) -> ChainArrays:
         np.ascontiguousarray(chain.reach, float),
         np.ascontiguousarray(chain.q_upper, float),
     )
+    if len(_CHAIN_CACHE) >= 5 * _CACHE_MAX:
+        _CHAIN_CACHE.clear()
     _CHAIN_CACHE[id(chain)] = (chain, arrs)
     return arrs
 
