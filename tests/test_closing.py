@@ -214,3 +214,103 @@ def test_settings_validation_lists_choices() -> None:
         ClosingSettings(mode="wiggle")  # type: ignore[arg-type]
     with pytest.raises(SettingsError, match="stop_tol_mm"):
         ClosingSettings(stop_tol_mm=0)
+
+
+# ------------------------------------------------------------ the compiled engine
+
+
+def _compiled(s: SimSettings) -> SimSettings:
+    return dataclasses.replace(s, closing=dataclasses.replace(s.closing, engine="compiled"))
+
+
+def _both_engines(kit: HandKit, obj, hyps, i: int, s: SimSettings):
+    out = []
+    for settings in (s, _compiled(s)):
+        st = ClosingStats()
+        base = simulate_base(kit, obj, hyps, i, settings, st)
+        g = simulate_thumb(kit, obj, base, settings, ClosingStats())
+        out.append((base.T_object_palm, g.q, tuple(st.events), g.events, st.queries))
+    return out
+
+
+def test_compiled_engine_matches_fcl_on_the_analytic_cylinder() -> None:
+    obj, hyps = AnalyticCylinder(), can_hypotheses()
+    kit = HandKit(build_hand(0, 45))
+    for i in (0, 57, 140, 211, 305):
+        (T_f, q_f, ev_f, th_f, n_f), (T_c, q_c, ev_c, th_c, n_c) = _both_engines(
+            kit, obj, hyps, i, SimSettings()
+        )
+        assert n_c > 0 and n_f > 0
+        assert ev_c == ev_f and th_c == th_f  # same stage events, thumb included
+        assert np.abs(T_c - T_f).max() < 1e-3  # approach stop, mm
+        assert np.abs(q_c - q_f).max() < 1e-3  # rad
+
+
+@pytest.mark.parametrize(
+    "key", ["small_marker", "plastic_pear", "washer", "chips_can", "coffee_can", "power_drill"]
+)
+def test_compiled_engine_matches_fcl_on_shipped_objects(key: str) -> None:
+    from app.model.objects import load_object
+    from app.sim.hypothesis_sets import cached_hypotheses
+
+    obj, hyps = load_object(key), cached_hypotheses(key)
+    kit = HandKit(build_hand(30, 75))
+    for i in range(3, len(hyps), len(hyps) // 3):
+        (T_f, q_f, ev_f, th_f, _), (T_c, q_c, ev_c, th_c, _) = _both_engines(
+            kit, obj, hyps, i, SimSettings()
+        )
+        assert ev_c == ev_f and th_c == th_f, i
+        assert np.abs(T_c - T_f).max() < 1e-3
+        assert np.abs(q_c - q_f).max() < 1e-3
+
+
+def test_close_finger_on_both_engines() -> None:
+    from app.sim.closing_compiled import object_arrays
+
+    obj = AnalyticCylinder()
+    kit = HandKit(build_hand(0, 45))
+    T = np.eye(4)
+    T[:3, 3] = [-20.0, -60.0, 100.0]  # palm beside the can: the index wraps it
+    ch = kit.chains["index"]
+    pieces = obj.collision_objects()
+    arrays = object_arrays(obj)
+    assert arrays is not None
+    qs, events = [], []
+    for engine in ("fcl", "compiled"):
+        settings = ClosingSettings(engine=engine)
+        st = ClosingStats()
+        obst = Obstacles(list(pieces), len(pieces), arrays=arrays)
+        qs.append(close_finger(ch, kit.bodies("index"), T, obst, settings, st))
+        events.append(st.events)
+    assert any(e.endswith("contact") for e in events[0])  # the finger meets the can
+    assert events[0] == events[1]
+    assert np.abs(qs[0] - qs[1]).max() < 1e-3
+
+
+def test_compiled_engine_leaves_meshes_to_fcl() -> None:
+    import trimesh
+
+    from app.model.objects.shapes import from_mesh
+    from app.sim.closing_compiled import object_arrays
+
+    class MeshTarget:
+        pieces = from_mesh(trimesh.creation.box((10.0, 10.0, 10.0))).pieces
+
+    assert object_arrays(MeshTarget()) is None
+
+
+def test_engine_setting_is_validated() -> None:
+    with pytest.raises(SettingsError, match="engine"):
+        ClosingSettings(engine="warp")  # type: ignore[arg-type]
+
+
+def test_engine_enters_the_settings_key_only_when_compiled() -> None:
+    s = SimSettings()
+    compiled = _compiled(s)
+    assert compiled.key() != s.key()
+    d = s.as_dict()
+    del d["closing"]["engine"]  # type: ignore[index]
+    from app.hashing import stable_hash
+    from app.quality.settings import ENGINE_VERSION
+
+    assert s.key() == stable_hash({"engine_version": ENGINE_VERSION, **d})  # keys as before

@@ -9,6 +9,7 @@ import fcl
 import numpy as np
 
 from app.model.contact_set import LINK_NAMES, ContactSet
+from app.model.objects.shapes import Piece
 from app.quality.outcome import GraspOutcome
 from app.sim.hypotheses import Hypotheses, make_hypotheses
 
@@ -60,6 +61,13 @@ class AnalyticCylinder:
 
     def collision_objects(self) -> list[fcl.CollisionObject]:
         return self._pieces
+
+    @property
+    def pieces(self) -> tuple[Piece, ...]:
+        """The one FCL cylinder as a ``Piece`` (the compiled closing engine reads it)."""
+        return (
+            Piece(fcl.Cylinder(self.radius, self.height), self.T[:3, :3], self.centroid_object),
+        )
 
     def sdf(self, p: np.ndarray) -> np.ndarray:
         p = (np.asarray(p, float) - self.T[:3, 3]) @ self.T[:3, :3]  # into the cylinder frame

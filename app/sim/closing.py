@@ -17,19 +17,23 @@ property of the geometry and the tolerance, not of any step size.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import fcl
 import numpy as np
 
 from app.model.hand.chains import FingerChain
-from app.sim.closing_settings import ClosingSettings
+from app.sim.closing_settings import (
+    EXACT_BELOW_MM,
+    REFINE_BAND,
+    REFINE_ITERS,
+    ClosingSettings,
+)
 
-#: Pairs whose distance lower bound is below this are queried exactly each step (mm).
-EXACT_BELOW_MM = 12.0
-#: Cap on false-position probes refining a stage's stop to the first crossing of gap = tol.
-REFINE_ITERS = 8
-#: The refinement ends once the stop's gap is within this fraction of tol below tol.
-REFINE_BAND = 0.002
+if TYPE_CHECKING:
+    from app.sim.closing_compiled import ObstacleArrays
+
+__all__ = ["EXACT_BELOW_MM", "REFINE_BAND", "REFINE_ITERS"]
 
 _LOWER = np.tri(3, dtype=bool)
 _REQ = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
@@ -67,6 +71,9 @@ class Obstacles:
     spheres: np.ndarray | None = None
     """(P, 4) optional bounding sphere (centre xyz, radius) of each obstacle, object frame,
     used to skip far pairs; rows with radius = inf are always queried."""
+    arrays: ObstacleArrays | None = None
+    """The same obstacles as flat arrays for the compiled engine (``settings.engine ==
+    'compiled'``); None: FCL closes (also what an imported mesh gets)."""
 
     @property
     def is_object(self) -> np.ndarray:
@@ -267,6 +274,41 @@ def advance_stage(
     return q, StageEvent("max_steps")
 
 
+def _advance(
+    chain: FingerChain,
+    bodies: list[fcl.CollisionObject],
+    T_object_palm: np.ndarray,
+    q: np.ndarray,
+    v: np.ndarray,
+    obstacles: Obstacles,
+    settings: ClosingSettings,
+    stats: ClosingStats,
+) -> tuple[np.ndarray, StageEvent]:
+    """``advance_stage`` on the engine of ``settings`` (FCL when there are no arrays)."""
+    if settings.engine != "compiled" or obstacles.arrays is None:
+        return advance_stage(chain, bodies, T_object_palm, q, v, obstacles, settings, stats)
+    from app.sim.closing_compiled import advance_stage_compiled
+
+    counters = np.zeros(3, np.int64)
+    q, kind, links, joints = advance_stage_compiled(
+        chain,
+        T_object_palm,
+        q,
+        v,
+        obstacles.arrays,
+        obstacles.n_object,
+        obstacles.mask,
+        obstacles.spheres,
+        settings.stop_tol_mm,
+        settings.max_steps,
+        counters,
+    )
+    stats.queries += int(counters[0])
+    stats.steps += int(counters[1])
+    stats.capped += int(counters[2])
+    return q, StageEvent(kind, links, joints)
+
+
 def close_finger(
     chain: FingerChain,
     bodies: list[fcl.CollisionObject],
@@ -293,7 +335,7 @@ def close_finger(
             q, ev = first_stage[chain.finger]  # type: ignore[index]
             q = q.copy()
         else:
-            q, ev = advance_stage(chain, bodies, T_object_palm, q, v, obstacles, settings, stats)
+            q, ev = _advance(chain, bodies, T_object_palm, q, v, obstacles, settings, stats)
             if memo:
                 first_stage[chain.finger] = (q.copy(), ev)  # type: ignore[index]
         stats.events.append(f"{chain.finger}:{np.flatnonzero(v > 0).tolist()}:{ev.kind}")
@@ -346,15 +388,42 @@ def approach(
     start_mm: float,
     settings: ClosingSettings,
     stats: ClosingStats,
+    arrays: tuple[ObstacleArrays, ObstacleArrays] | None = None,
 ) -> float | None:
     """Slide the hand along the ray toward the object until first contact.
 
     The hand is placed with P on the line ``target + s · ray`` and orientation R; s falls
     from ``start_mm``. ``bodies`` (with FCL-frame poses ``T_palm_bodies`` (B, 4, 4)) are the
     links that take part. Returns s at first contact (gap ≤ stop tolerance), or None if the
-    hand passes the target by ``start_mm`` without touching.
+    hand passes the target by ``start_mm`` without touching. ``arrays``: (bodies, pieces) as
+    flat arrays for the compiled engine (used when ``settings.engine == 'compiled'``).
     """
     tol = settings.stop_tol_mm
+    if settings.engine == "compiled" and arrays is not None:
+        from app.sim.closing_compiled import approach_compiled
+
+        counters = np.zeros(3, np.int64)
+        s_c, status = approach_compiled(
+            arrays[0],
+            T_palm_bodies,
+            R_object_palm,
+            ray_object,
+            target_object,
+            approach_point_palm,
+            arrays[1],
+            start_mm,
+            tol,
+            settings.max_steps,
+            counters,
+        )
+        stats.queries += int(counters[0])
+        stats.steps += int(counters[1])
+        stats.capped += int(counters[2])
+        if status == 1:
+            return None
+        if status == 0 and stats.stages is not None:
+            stats.approach_s = (start_mm, s_c)
+        return s_c
     s = start_mm
     B, P = len(bodies), len(object_pieces)
     lb = np.full((B, P), -np.inf)

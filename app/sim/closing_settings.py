@@ -10,6 +10,15 @@ from app.errors import SettingsError
 
 ClosingMode = Literal["sequential", "independent_thumb", "coupled_tendon"]
 CLOSING_MODES: tuple[str, ...] = ("sequential", "independent_thumb", "coupled_tendon")
+ClosingEngine = Literal["fcl", "compiled"]
+CLOSING_ENGINES: tuple[str, ...] = ("fcl", "compiled")
+
+#: Pairs whose distance lower bound is below this are queried exactly each step (mm).
+EXACT_BELOW_MM = 12.0
+#: Cap on false-position probes refining a stage's stop to the first crossing of gap = tol.
+REFINE_ITERS = 8
+#: The refinement ends once the stop's gap is within this fraction of tol below tol.
+REFINE_BAND = 0.002
 
 
 @dataclass(frozen=True)
@@ -32,6 +41,10 @@ class ClosingSettings:
     where it is and is counted in the statistics)."""
     approach_clearance_mm: float = 250.0
     """The approach starts this far beyond the object's bounding sphere."""
+    engine: ClosingEngine = "fcl"
+    """Distance engine of the approach and closing: 'fcl' (python-fcl queries from Python)
+    or 'compiled' (the same algorithm compiled with numba, exact GJK on the same convex
+    pieces: ``app/sim/closing_compiled.py``). Objects with a mesh piece always use FCL."""
 
     def __post_init__(self) -> None:
         if self.mode not in CLOSING_MODES:
@@ -40,6 +53,10 @@ class ClosingSettings:
             )
         if not (0 < self.stop_tol_mm <= 5):
             raise SettingsError(f"stop_tol_mm must be in (0, 5] mm, got {self.stop_tol_mm}")
+        if self.engine not in CLOSING_ENGINES:
+            raise SettingsError(
+                f"closing engine {self.engine!r} unknown; choose one of {CLOSING_ENGINES}"
+            )
         for name in ("thumb_rates", "tendon_ratios"):
             v = getattr(self, name)
             if not all(math.isfinite(x) and x >= 0 for x in v) or max(v) <= 0:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import fcl
 import numpy as np
@@ -35,6 +35,18 @@ from app.sim.closing import (
 from app.sim.closing_settings import ClosingSettings
 from app.sim.contacts import ContactSettings, _reach, contacts_of_links, merge
 from app.sim.hypotheses import Hypotheses
+
+if TYPE_CHECKING:
+    from app.sim.closing_compiled import ObstacleArrays
+
+
+def _object_arrays(obj: GraspTarget, closing: ClosingSettings) -> ObstacleArrays | None:
+    """The object's pieces as arrays when the compiled engine is asked for and can run."""
+    if closing.engine != "compiled":
+        return None
+    from app.sim.closing_compiled import object_arrays
+
+    return object_arrays(obj)
 
 
 class PalmarRule(Protocol):
@@ -83,6 +95,23 @@ class HandKit:
         # approach bodies: every link of the open hand (the thumb too)
         self.approach_idx = list(range(len(self.names)))
         self.T_palm_approach = np.stack([T_open[i] @ self.T_link_fcl[i] for i in self.approach_idx])
+        self._approach_arrays: ObstacleArrays | None = None
+
+    def approach_arrays(self) -> ObstacleArrays:
+        """The approach bodies' shapes as arrays (compiled engine; poses are per call)."""
+        if self._approach_arrays is None:
+            from app.sim.closing_compiled import link_arrays
+
+            shapes = [self.shapes[j] for j in self.approach_idx]
+            self._approach_arrays = link_arrays(shapes, np.tile(np.eye(4), (len(shapes), 1, 1)))
+        return self._approach_arrays
+
+    def link_arrays(self, idx: list[int], T_links: np.ndarray) -> ObstacleArrays:
+        """Links ``idx`` posed at ``T_links`` (16, 4, 4) as obstacle arrays (compiled engine)."""
+        from app.sim.closing_compiled import link_arrays
+
+        T = T_links[idx] @ self.T_link_fcl[idx]
+        return link_arrays([self.shapes[j] for j in idx], T)
 
     def contacts(
         self, obj: GraspTarget, T_links: np.ndarray, idx: list[int], settings: SimulationSettings
@@ -176,6 +205,7 @@ def simulate_base(
     ray = hyps.ray_object[i]
     start = float(np.linalg.norm(hyps.target_object - centroid)) + obj.max_radius
     start += closing.approach_clearance_mm
+    obj_arr = _object_arrays(obj, closing)
     s = approach(
         [kit.moving[j] for j in kit.approach_idx],
         kit.T_palm_approach,
@@ -187,6 +217,7 @@ def simulate_base(
         start,
         closing,
         stats,
+        None if obj_arr is None else (kit.approach_arrays(), obj_arr),
     )
     T = np.eye(4)
     T[:3, :3] = R
@@ -196,7 +227,7 @@ def simulate_base(
         return BaseGrasp(False, T, q, ContactSet(), stats.queries)
     s += float(hyps.standoff_mm[i])
     T[:3, 3] = hyps.target_object + s * ray - R @ kit.hand.approach_point_palm
-    obstacles = Obstacles(list(pieces), len(pieces))
+    obstacles = Obstacles(list(pieces), len(pieces), arrays=obj_arr)
     for finger in fingers if fingers is not None else closing_fingers(spec.grasp_type):
         if finger == "thumb":
             continue
@@ -237,7 +268,9 @@ def simulate_thumb(
     for n, j in enumerate(others):
         spheres[len(pieces) + n, :3] = (T_links[j] @ kit.T_link_fcl[j])[:3, 3]
         spheres[len(pieces) + n, 3] = kit.reach[j]
-    obstacles = Obstacles(objs, len(pieces), mask, spheres)
+    obj_arr = _object_arrays(obj, closing)
+    arrays = None if obj_arr is None else obj_arr.concat(kit.link_arrays(others, T_links))
+    obstacles = Obstacles(objs, len(pieces), mask, spheres, arrays)
     q[list(thumb.joints)] = close_finger(
         thumb, kit.bodies("thumb"), T, obstacles, closing, stats, base.thumb_first_stage
     )

@@ -11,7 +11,7 @@ import numpy as np
 import trimesh
 
 from app.errors import UnknownObjectError
-from app.model.objects.shapes import Geometry, build
+from app.model.objects.shapes import Geometry, Piece, build
 from app.model.objects.spec import OBJECT_KEYS, ObjectSpec, data_dir, read_spec, user_dir
 
 #: Central-difference step (mm) of the numerical SDF gradient.
@@ -85,6 +85,12 @@ class GraspObject:
                 for pc in self._geometry.pieces
             ]
         return self._collision
+
+    @property
+    def pieces(self) -> tuple[Piece, ...]:
+        """The collision pieces (FCL geometry, pose, hull vertices), ``collision_objects()``
+        order."""
+        return self._geometry.pieces
 
     @property
     def piece_labels(self) -> tuple[str, ...]:

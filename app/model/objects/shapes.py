@@ -47,6 +47,9 @@ class Piece:
     """(3,) position of the piece frame origin in the object frame, mm."""
     label: str = ""
     """What part of the object this piece is (for debugging and pictures)."""
+    vertices: np.ndarray | None = None
+    """(K, 3) hull vertices of a Convex piece, piece frame (the compiled closing engine's
+    support function; FCL's Convex does not expose them); None for primitives and meshes."""
 
 
 @dataclass(frozen=True)
@@ -187,8 +190,8 @@ def _transform_sdf(local: SdfFn, T: np.ndarray) -> SdfFn:
     return sdf
 
 
-def _convex_fcl(points: np.ndarray) -> Any:
-    """fcl.Convex hull of (K, 3) points (outward faces)."""
+def _convex_fcl(points: np.ndarray) -> tuple[Any, np.ndarray]:
+    """fcl.Convex hull of (K, 3) points (outward faces), and its vertices (V, 3)."""
     hull = ConvexHull(points)
     v = hull.points[hull.vertices]
     remap = np.full(len(hull.points), -1)
@@ -201,7 +204,8 @@ def _convex_fcl(points: np.ndarray) -> Any:
     flip = ((tri[:, 0] - c) * n).sum(1) < 0
     faces[flip] = faces[flip][:, ::-1]
     flat = np.hstack([np.full((len(faces), 1), 3), faces]).ravel().astype(np.int64)
-    return fcl.Convex(v.astype(float), len(faces), flat)
+    v = np.ascontiguousarray(v, dtype=float)
+    return fcl.Convex(v, len(faces), flat), v
 
 
 def _ring(r: float, z: float, n: int) -> np.ndarray:
@@ -292,13 +296,16 @@ def revolved_profile(
     pieces = []
     runs = _concave_runs(z, r, run_tol_mm) if with_pieces else []
     for k, (i, j) in enumerate(runs):
+        verts: np.ndarray | None = None
         if j == i + 1 and abs(r[i] - r[j]) < 1e-9 and r[i] > 0:
             geom: Any = fcl.Cylinder(float(r[i]), float(z[j] - z[i]))
             t_loc = np.array([0.0, 0.0, 0.5 * (z[i] + z[j])])
         else:
-            geom = _convex_fcl(np.vstack([_ring(r[m], z[m], n_piece) for m in range(i, j + 1)]))
+            geom, verts = _convex_fcl(
+                np.vstack([_ring(r[m], z[m], n_piece) for m in range(i, j + 1)])
+            )
             t_loc = np.zeros(3)
-        pieces.append(Piece(geom, R.copy(), R @ t_loc + t, f"{label}[{k}]"))
+        pieces.append(Piece(geom, R.copy(), R @ t_loc + t, f"{label}[{k}]", verts))
     return Geometry(mesh, _transform_sdf(sdf_local, T), tuple(pieces))
 
 
@@ -332,7 +339,8 @@ def _annulus(r_in: float, r_out: float, height: float, n_wedges: int, label: str
                 np.column_stack([xy, np.full(len(xy), height)]),
             ]
         )
-        pieces.append(Piece(_convex_fcl(v), np.eye(3), np.zeros(3), f"{label}[{w}]"))
+        geom, hull = _convex_fcl(v)
+        pieces.append(Piece(geom, np.eye(3), np.zeros(3), f"{label}[{w}]", hull))
     return Geometry(mesh, sdf, tuple(pieces))
 
 
@@ -388,7 +396,8 @@ def _prism(poly: np.ndarray, z0: float, z1: float, T: np.ndarray, label: str) ->
     mesh = trimesh.Trimesh(v, np.vstack([sides, bottom, top]), process=True)
     mesh.fix_normals()
     mesh.apply_transform(T)
-    piece = Piece(_convex_fcl(v), T[:3, :3].copy(), T[:3, 3].copy(), label)
+    geom, hull = _convex_fcl(v)
+    piece = Piece(geom, T[:3, :3].copy(), T[:3, 3].copy(), label, hull)
     return Geometry(mesh, _transform_sdf(sdf_local, T), (piece,))
 
 

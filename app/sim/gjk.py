@@ -1,0 +1,316 @@
+"""Exact distance between convex shapes by GJK, compiled with numba (the compiled engine).
+
+Shapes are described by flat numbers so that whole closing problems fit in arrays:
+
+- ``type`` (int): ``POINTS`` (convex hull of vertices: an ``fcl.Convex`` piece), ``BOX``
+  (``prm`` = half extents), ``CYLINDER`` (``prm[0]`` = radius, ``prm[1]`` = half length, axis
+  z of the shape frame), ``CAPSULE`` (``prm[0]`` = radius, ``prm[1]`` = half length, axis z),
+  ``SPHERE`` (``prm[0]`` = radius); FCL's conventions (centred in their frame).
+- a pose (R (3, 3), t (3,)) placing the shape frame in the world;
+- for ``POINTS``, rows ``verts[v0:v1]`` of a shared (V, 3) array (shape frame).
+
+Capsules and spheres are run as their core (segment, point) and their radius subtracted
+afterwards, so every support function is exact and the only curved core is the cylinder.
+GJK keeps a simplex of at most four Minkowski-difference points; the point of its hull
+nearest the origin is found by enumerating its (at most 15) faces, solving each face's
+affine projection and keeping the smallest candidate whose barycentric weights are all
+non-negative (slower than Johnson's recursion in theory, but without its sign-of-determinant
+pitfalls on near-degenerate simplices). The iteration ends when the duality gap
+|v|² − v·w is below ``EPS_REL`` · |v|² plus a roundoff floor, so the returned distance is
+within about 1e-9 mm of the true one (tests compare it with FCL on random poses).
+Intersecting cores return the (non-positive) value ``-margins``: a touching indicator,
+not a penetration depth (the closing never needs the depth, only the sign).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+POINTS = 0
+BOX = 1
+CYLINDER = 2
+CAPSULE = 3
+SPHERE = 4
+
+#: Relative duality-gap tolerance of GJK on |v|² (distance error ~ EPS_REL/2 · distance).
+EPS_REL = 1e-12
+#: Absolute floor of the duality gap (mm²): roundoff of coordinates ~100 mm.
+EPS_ABS = 1e-18
+#: Iteration cap (curved cylinder cores converge linearly; polytopes in a few steps).
+MAX_ITERS = 128
+
+
+@njit(cache=True, inline="always")
+def _support_local(
+    typ: int, prm: np.ndarray, verts: np.ndarray, v0: int, v1: int, d: np.ndarray, out: np.ndarray
+) -> None:
+    """Support point of a shape's core in its own frame along direction ``d`` -> ``out``."""
+    if typ == POINTS:
+        best = -1e300
+        ib = v0
+        for i in range(v0, v1):
+            s = verts[i, 0] * d[0] + verts[i, 1] * d[1] + verts[i, 2] * d[2]
+            if s > best:
+                best = s
+                ib = i
+        out[0] = verts[ib, 0]
+        out[1] = verts[ib, 1]
+        out[2] = verts[ib, 2]
+    elif typ == BOX:
+        for j in range(3):
+            out[j] = prm[j] if d[j] >= 0.0 else -prm[j]
+    elif typ == CYLINDER:
+        n = math.sqrt(d[0] * d[0] + d[1] * d[1])
+        if n > 0.0:
+            out[0] = prm[0] * d[0] / n
+            out[1] = prm[0] * d[1] / n
+        else:
+            out[0] = 0.0
+            out[1] = 0.0
+        out[2] = prm[1] if d[2] >= 0.0 else -prm[1]
+    elif typ == CAPSULE:
+        out[0] = 0.0
+        out[1] = 0.0
+        out[2] = prm[1] if d[2] >= 0.0 else -prm[1]
+    else:  # SPHERE core: its centre
+        out[0] = 0.0
+        out[1] = 0.0
+        out[2] = 0.0
+
+
+@njit(cache=True, inline="always")
+def margin(typ: int, prm: np.ndarray) -> float:
+    """The radius swept around a shape's core (capsule, sphere), else 0."""
+    if typ == CAPSULE or typ == SPHERE:
+        return prm[0]
+    return 0.0
+
+
+@njit(cache=True)
+def _closest_on_simplex(
+    S: np.ndarray, n: int, v: np.ndarray, keep: np.ndarray, wk: np.ndarray, idx: np.ndarray
+) -> int:
+    """Point of conv(S[:n]) nearest the origin -> ``v``; the face used -> ``keep`` (its point
+    indices, returned count). Returns 0 if no face qualifies (cannot happen for n >= 1).
+    ``wk`` (9, 3) and ``idx`` (4,) are scratch."""
+    best = 1e300
+    nbest = 0
+    e = wk[0:3]
+    G = wk[3:6]
+    b = wk[6]
+    mu = wk[7]
+    c = wk[8]
+    for mask in range(1, 1 << n):
+        m = 0
+        for i in range(n):
+            if mask & (1 << i):
+                idx[m] = i
+                m += 1
+        p0 = S[idx[0]]
+        ok = True
+        if m == 1:
+            c[0], c[1], c[2] = p0[0], p0[1], p0[2]
+        else:
+            k = m - 1
+            for i in range(k):
+                for j in range(3):
+                    e[i, j] = S[idx[i + 1], j] - p0[j]
+            for i in range(k):
+                b[i] = -(e[i, 0] * p0[0] + e[i, 1] * p0[1] + e[i, 2] * p0[2])
+                for j in range(i, k):
+                    g = e[i, 0] * e[j, 0] + e[i, 1] * e[j, 1] + e[i, 2] * e[j, 2]
+                    G[i, j] = g
+                    G[j, i] = g
+            if k == 1:
+                if G[0, 0] <= 1e-30:
+                    ok = False
+                else:
+                    mu[0] = b[0] / G[0, 0]
+            elif k == 2:
+                det = G[0, 0] * G[1, 1] - G[0, 1] * G[1, 0]
+                if det <= 1e-14 * G[0, 0] * G[1, 1] or det <= 1e-300:
+                    ok = False
+                else:
+                    mu[0] = (b[0] * G[1, 1] - G[0, 1] * b[1]) / det
+                    mu[1] = (G[0, 0] * b[1] - G[1, 0] * b[0]) / det
+            else:
+                c00 = G[1, 1] * G[2, 2] - G[1, 2] * G[2, 1]
+                c01 = G[1, 2] * G[2, 0] - G[1, 0] * G[2, 2]
+                c02 = G[1, 0] * G[2, 1] - G[1, 1] * G[2, 0]
+                det = G[0, 0] * c00 + G[0, 1] * c01 + G[0, 2] * c02
+                if det <= 1e-14 * G[0, 0] * G[1, 1] * G[2, 2] or det <= 1e-300:
+                    ok = False
+                else:
+                    c10 = G[0, 2] * G[2, 1] - G[0, 1] * G[2, 2]
+                    c11 = G[0, 0] * G[2, 2] - G[0, 2] * G[2, 0]
+                    c12 = G[0, 1] * G[2, 0] - G[0, 0] * G[2, 1]
+                    c20 = G[0, 1] * G[1, 2] - G[0, 2] * G[1, 1]
+                    c21 = G[0, 2] * G[1, 0] - G[0, 0] * G[1, 2]
+                    c22 = G[0, 0] * G[1, 1] - G[0, 1] * G[1, 0]
+                    mu[0] = (c00 * b[0] + c10 * b[1] + c20 * b[2]) / det
+                    mu[1] = (c01 * b[0] + c11 * b[1] + c21 * b[2]) / det
+                    mu[2] = (c02 * b[0] + c12 * b[1] + c22 * b[2]) / det
+            if ok:
+                lam0 = 1.0
+                for i in range(k):
+                    lam0 -= mu[i]
+                    if mu[i] < 0.0:
+                        ok = False
+                if lam0 < 0.0:
+                    ok = False
+            if ok:
+                for j in range(3):
+                    s = p0[j]
+                    for i in range(k):
+                        s += mu[i] * e[i, j]
+                    c[j] = s
+        if ok:
+            nn = c[0] * c[0] + c[1] * c[1] + c[2] * c[2]
+            if nn < best:
+                best = nn
+                v[0], v[1], v[2] = c[0], c[1], c[2]
+                for i in range(m):
+                    keep[i] = idx[i]
+                nbest = m
+    return nbest
+
+
+@njit(cache=True)
+def core_distance(
+    ta: int,
+    pa: np.ndarray,
+    Ra: np.ndarray,
+    tra: np.ndarray,
+    tb: int,
+    pb: np.ndarray,
+    Rb: np.ndarray,
+    trb: np.ndarray,
+    verts: np.ndarray,
+    va0: int,
+    va1: int,
+    vb0: int,
+    vb1: int,
+) -> float:
+    """Distance between the cores of shapes a and b (0 when they intersect).
+
+    The computation runs in b's frame (a is moved there once)."""
+    # a's pose in b's frame: R = Rb^T Ra, t = Rb^T (ta - tb)
+    R = np.empty((3, 3))
+    t = np.empty(3)
+    for i in range(3):
+        s = 0.0
+        for j in range(3):
+            s += Rb[j, i] * (tra[j] - trb[j])
+            acc = 0.0
+            for k in range(3):
+                acc += Rb[k, i] * Ra[k, j]
+            R[i, j] = acc
+        t[i] = s
+    S = np.empty((4, 3))
+    S2 = np.empty((4, 3))
+    keep = np.empty(4, np.int64)
+    v = np.empty(3)
+    d = np.empty(3)
+    dl = np.empty(3)
+    sa = np.empty(3)
+    sb = np.empty(3)
+    w = np.empty(3)
+    vn = np.empty(3)
+    wk = np.empty((9, 3))
+    idx = np.empty(4, np.int64)
+
+    def minkowski(dir_: np.ndarray) -> None:  # w = s_a(dir) - s_b(-dir), b frame
+        for i in range(3):
+            dl[i] = R[0, i] * dir_[0] + R[1, i] * dir_[1] + R[2, i] * dir_[2]
+        _support_local(ta, pa, verts, va0, va1, dl, sa)
+        for i in range(3):
+            d[i] = -dir_[i]
+        _support_local(tb, pb, verts, vb0, vb1, d, sb)
+        for i in range(3):
+            w[i] = R[i, 0] * sa[0] + R[i, 1] * sa[1] + R[i, 2] * sa[2] + t[i] - sb[i]
+
+    # initial direction: from b's origin towards a's
+    init = np.empty(3)
+    init[0], init[1], init[2] = -t[0], -t[1], -t[2]
+    if init[0] * init[0] + init[1] * init[1] + init[2] * init[2] < 1e-24:
+        init[0] = 1.0
+    minkowski(init)
+    S[0] = w
+    n = 1
+    v[0], v[1], v[2] = w[0], w[1], w[2]
+    vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+    for _ in range(MAX_ITERS):
+        if vv <= 1e-24:
+            return 0.0
+        for i in range(3):
+            d[i] = -v[i]
+        minkowski(d)  # w = support of the difference along -v
+        vw = v[0] * w[0] + v[1] * w[1] + v[2] * w[2]
+        if vv - vw <= EPS_REL * vv + EPS_ABS:
+            break
+        dup = False
+        for i in range(n):
+            if S[i, 0] == w[0] and S[i, 1] == w[1] and S[i, 2] == w[2]:
+                dup = True
+        if dup:
+            break
+        S[n] = w
+        n += 1
+        m = _closest_on_simplex(S, n, vn, keep, wk, idx)
+        vvn = vn[0] * vn[0] + vn[1] * vn[1] + vn[2] * vn[2]
+        if vvn >= vv:  # no progress: numerical floor reached
+            break
+        for i in range(m):
+            S2[i] = S[keep[i]]
+        for i in range(m):
+            S[i] = S2[i]
+        n = m
+        v[0], v[1], v[2] = vn[0], vn[1], vn[2]
+        vv = vvn
+        if n == 4:  # origin inside the tetrahedron
+            return 0.0
+    return math.sqrt(vv)
+
+
+@njit(cache=True)
+def shape_distance(
+    ta: int,
+    pa: np.ndarray,
+    Ra: np.ndarray,
+    tra: np.ndarray,
+    tb: int,
+    pb: np.ndarray,
+    Rb: np.ndarray,
+    trb: np.ndarray,
+    verts: np.ndarray,
+    va0: int,
+    va1: int,
+    vb0: int,
+    vb1: int,
+) -> float:
+    """Distance between shapes a and b, mm (cores' distance minus the margins)."""
+    dc = core_distance(ta, pa, Ra, tra, tb, pb, Rb, trb, verts, va0, va1, vb0, vb1)
+    return dc - margin(ta, pa) - margin(tb, pb)
+
+
+def describe_fcl_geometry(geom: object) -> tuple[int, np.ndarray] | None:
+    """(type, prm (3,)) of an FCL primitive; None for Convex/BVH (vertices needed)."""
+    import fcl
+
+    prm = np.zeros(3)
+    if isinstance(geom, fcl.Box):
+        prm[:] = 0.5 * np.asarray(geom.side, float)
+        return BOX, prm
+    if isinstance(geom, fcl.Cylinder):
+        prm[0], prm[1] = geom.radius, 0.5 * geom.lz
+        return CYLINDER, prm
+    if isinstance(geom, fcl.Capsule):
+        prm[0], prm[1] = geom.radius, 0.5 * geom.lz
+        return CAPSULE, prm
+    if isinstance(geom, fcl.Sphere):
+        prm[0] = geom.radius
+        return SPHERE, prm
+    return None
