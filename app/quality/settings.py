@@ -46,7 +46,16 @@ class SimSettings:
         return asdict(self)
 
     def key(self) -> str:
-        """Stable hash of all settings, the closing engine included (store key)."""
+        """Stable hash of all settings (store key).
+
+        The closing engine enters the key only when it is not the default 'fcl', so the keys
+        (and stored results) from before the field existed stay valid, while compiled-engine
+        results are never mixed with FCL ones."""
         from app.hashing import stable_hash
 
-        return stable_hash({"engine_version": ENGINE_VERSION, **self.as_dict()})
+        d = self.as_dict()
+        closing = d["closing"]
+        assert isinstance(closing, dict)
+        if closing.get("engine") == "fcl":
+            del closing["engine"]
+        return stable_hash({"engine_version": ENGINE_VERSION, **d})
