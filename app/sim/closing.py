@@ -317,12 +317,14 @@ def close_finger(
     settings: ClosingSettings,
     stats: ClosingStats,
     first_stage: dict[str, tuple[np.ndarray, StageEvent]] | None = None,
+    first_stage_only: bool = False,
 ) -> np.ndarray:
     """Close one finger from its open posture by ``settings.mode``; returns its q (3,).
 
     ``first_stage``: a memo of the sequential mode's first stage (the proximal joint alone),
     keyed by finger, for callers whose first stage is the same across calls (the thumb's CMC
     stage across MCP design angles: ``app.sim.simulate``). Other modes ignore it.
+    ``first_stage_only``: in sequential mode, run (and memoise) the first stage and stop.
     """
     q = chain.q_lower.copy()
     mode = settings.mode
@@ -372,6 +374,8 @@ def close_finger(
     elif mode == "independent_thumb" and chain.finger == "thumb":
         rates = np.array([settings.thumb_rates[0], settings.thumb_rates[1], 0.0])
         sequential(together([0, 1], rates))
+    elif first_stage_only:
+        run(np.eye(3)[0])
     else:
         sequential(0)
     return q

@@ -11,6 +11,7 @@ final posture.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import TYPE_CHECKING, Protocol
@@ -236,7 +237,37 @@ def simulate_base(
     T_links = T @ kit.hand.link_poses(q)
     idx = [j for j, n in enumerate(kit.names) if not n.startswith("thumb")]
     cs, n_q = kit.contacts(obj, T_links, idx, settings)
-    return BaseGrasp(True, T, q, cs, stats.queries + n_q)
+    base = BaseGrasp(True, T, q, cs, stats.queries + n_q)
+    if closing.mode == "sequential":
+        # the thumb's CMC stage, shared by every MCP angle, is closed here by this (the base)
+        # kit, so that it never depends on which design happens to close its thumb first
+        thumb, st = kit.chains["thumb"], ClosingStats()
+        close_finger(thumb, kit.bodies("thumb"), T, _thumb_obstacles(kit, obj, T, q, closing),
+                     closing, st, base.thumb_first_stage, first_stage_only=True)  # fmt: skip
+        base = dataclasses.replace(base, queries=base.queries + st.queries)
+    return base
+
+
+def _thumb_obstacles(
+    kit: HandKit, obj: GraspTarget, T: np.ndarray, q: np.ndarray, closing: ClosingSettings
+) -> Obstacles:
+    """What the thumb closes against: the object, and (self-collision) the palm and the long
+    fingers posed at ``q`` (15,), the base posture."""
+    pieces = list(obj.collision_objects())
+    T_links = T @ kit.hand.link_poses(q)
+    others = [j for j, n in enumerate(kit.names) if not n.startswith("thumb")]
+    for j in others:
+        kit.static[j].setTransform(fcl_transform(T_links[j] @ kit.T_link_fcl[j]))
+    objs = pieces + [kit.static[j] for j in others]
+    mask = np.ones((3, len(objs)), bool)
+    mask[0, len(pieces)] = False  # the metacarpal sits in the thenar: never against the palm
+    spheres = np.full((len(objs), 4), np.inf)
+    for n, j in enumerate(others):
+        spheres[len(pieces) + n, :3] = (T_links[j] @ kit.T_link_fcl[j])[:3, 3]
+        spheres[len(pieces) + n, 3] = kit.reach[j]
+    obj_arr = _object_arrays(obj, closing)
+    arrays = None if obj_arr is None else obj_arr.concat(kit.link_arrays(others, T_links))
+    return Obstacles(objs, len(pieces), mask, spheres, arrays)
 
 
 def simulate_thumb(
@@ -255,22 +286,7 @@ def simulate_thumb(
         return Grasp(T, q, base.contacts, n_main, False, 0)
     closing = settings.closing
     stats = stats if stats is not None else ClosingStats()
-    pieces = list(obj.collision_objects())
-    # self-collision bodies: palm and long-finger links, posed at the base posture
-    T_links = T @ kit.hand.link_poses(q)
-    others = [j for j, n in enumerate(kit.names) if not n.startswith("thumb")]
-    for j in others:
-        kit.static[j].setTransform(fcl_transform(T_links[j] @ kit.T_link_fcl[j]))
-    objs = pieces + [kit.static[j] for j in others]
-    mask = np.ones((3, len(objs)), bool)
-    mask[0, len(pieces)] = False  # the metacarpal sits in the thenar: never against the palm
-    spheres = np.full((len(objs), 4), np.inf)
-    for n, j in enumerate(others):
-        spheres[len(pieces) + n, :3] = (T_links[j] @ kit.T_link_fcl[j])[:3, 3]
-        spheres[len(pieces) + n, 3] = kit.reach[j]
-    obj_arr = _object_arrays(obj, closing)
-    arrays = None if obj_arr is None else obj_arr.concat(kit.link_arrays(others, T_links))
-    obstacles = Obstacles(objs, len(pieces), mask, spheres, arrays)
+    obstacles = _thumb_obstacles(kit, obj, T, q, closing)
     q[list(thumb.joints)] = close_finger(
         thumb, kit.bodies("thumb"), T, obstacles, closing, stats, base.thumb_first_stage
     )
