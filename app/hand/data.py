@@ -37,6 +37,44 @@ class FingerDims:
 
 
 @dataclass(frozen=True)
+class ThumbReading:
+    """How the design angles (c, m) place the thumb's joint axes (docs/validation.md).
+
+    All vectors are unit vectors in the palm frame, for the open thumb (q = 0) at c = 0.
+    """
+
+    rest_direction: np.ndarray
+    """(3,) long axis of the metacarpal (and of the straight open thumb), CMC toward MCP."""
+    rest_closing_direction: np.ndarray
+    """(3,) the way the metacarpal moves when the CMC joint closes (its ``n_palmar``),
+    perpendicular to ``rest_direction``; the CMC axis is rest_direction × this."""
+    cmc_tilt_line: np.ndarray
+    """(3,) c turns the whole metacarpal frame (CMC axis and open thumb) by +c about this
+    line (right-hand rule); ``cmc_tilt='radial'`` turns it by -c."""
+    mcp_sense: float
+    """+1: the MCP axis is the CMC axis turned by m about the metacarpal's long axis toward
+    the metacarpal's palmar side (the first reading); -1: toward its dorsal side."""
+
+
+#: The first reading (``hand_models/imma_right_v1.toml``): the defaults for a hand file
+#: without these keys.
+V1_READING = {
+    "rest_direction": [1.0, 0.0, 0.0],
+    "rest_closing_direction": [0.0, 0.0, 1.0],
+    "cmc_tilt_line": [0.0, 0.0, 1.0],
+    "mcp_sense": 1,
+}
+
+
+def _unit(v: list[float], what: str, path: Path) -> np.ndarray:
+    a = np.asarray(v, float)
+    n = float(np.linalg.norm(a))
+    if a.shape != (3,) or not np.isfinite(a).all() or n == 0.0:
+        raise HandbenchError(f"{path}: thumb.{what} must be a nonzero 3-vector, got {v!r}")
+    return a if n == 1.0 else a / n
+
+
+@dataclass(frozen=True)
 class ThumbDims:
     """The thumb: metacarpal (CMC), proximal (MCP) and distal (IP) links."""
 
@@ -48,6 +86,8 @@ class ThumbDims:
     """Capsule radii of the three links, mm."""
     limits_deg: tuple[tuple[float, float], ...]
     """(lo, hi) of CMC, MCP, IP in degrees."""
+    reading: ThumbReading
+    """How the design angles orient the CMC and MCP axes."""
 
 
 @dataclass(frozen=True)
@@ -92,10 +132,29 @@ def _pairs(x: list[list[float]]) -> tuple[tuple[float, float], ...]:
     return tuple((float(a), float(b)) for a, b in x)
 
 
-@lru_cache(maxsize=8)
+#: Environment variable selecting the default hand file: a path, or a name in hand_models/.
+HAND_ENV = "HANDBENCH_HAND"
+
+
+def hand_path(path: str | Path | None = None) -> Path:
+    """The hand file to read: ``path``; else ``$HANDBENCH_HAND`` (a path, or a name such as
+    ``imma_right_v1`` looked up in ``<data root>/hand_models/``); else ``imma_right.toml``."""
+    if path is None:
+        path = os.environ.get(HAND_ENV) or "imma_right"
+        p = Path(path)
+        if p.suffix != ".toml" and len(p.parts) == 1:
+            return data_root() / "hand_models" / f"{path}.toml"
+        return p
+    return Path(path)
+
+
 def load_hand_dims(path: str | Path | None = None) -> HandDims:
-    """Read a hand model file (default ``hand_models/imma_right.toml``)."""
-    p = Path(path) if path is not None else data_root() / "hand_models" / "imma_right.toml"
+    """Read a hand model file (default: see ``hand_path``)."""
+    return _load_hand_dims(hand_path(path))
+
+
+@lru_cache(maxsize=8)
+def _load_hand_dims(p: Path) -> HandDims:
     try:
         raw = p.read_bytes()
         d = tomllib.loads(raw.decode())
@@ -112,6 +171,17 @@ def load_hand_dims(path: str | Path | None = None) -> HandDims:
         for f in d["finger"]
     )
     t = d["thumb"]
+    r = {k: t.get(k, v) for k, v in V1_READING.items()}
+    reading = ThumbReading(
+        rest_direction=_unit(r["rest_direction"], "rest_direction", p),
+        rest_closing_direction=_unit(r["rest_closing_direction"], "rest_closing_direction", p),
+        cmc_tilt_line=_unit(r["cmc_tilt_line"], "cmc_tilt_line", p),
+        mcp_sense=float(r["mcp_sense"]),
+    )
+    if abs(float(reading.rest_direction @ reading.rest_closing_direction)) > 1e-9:
+        raise HandbenchError(f"{p}: thumb.rest_closing_direction must be ⟂ rest_direction")
+    if reading.mcp_sense not in (1.0, -1.0):
+        raise HandbenchError(f"{p}: thumb.mcp_sense must be 1 or -1, got {r['mcp_sense']!r}")
     return HandDims(
         name=d["name"],
         path=p,
@@ -124,5 +194,6 @@ def load_hand_dims(path: str | Path | None = None) -> HandDims:
             lengths=tuple(float(v) for v in t["lengths"]),  # type: ignore[arg-type]
             radii=tuple(float(v) for v in t["radii"]),  # type: ignore[arg-type]
             limits_deg=_pairs(t["limits"]),
+            reading=reading,
         ),
     )

@@ -17,7 +17,7 @@ import trimesh
 
 from app.contact_set import LINK_NAMES, LONG_FINGERS, PHALANGES, THUMB_LINKS
 from app.design import ThumbDesign
-from app.hand.data import HandDims, load_hand_dims
+from app.hand.data import HandDims, ThumbReading, load_hand_dims
 from app.hand.geometry import BoxShape, CapsuleShape, Shape
 
 JOINT_NAMES = ("thumb_cmc", "thumb_mcp", "thumb_ip") + tuple(
@@ -56,26 +56,45 @@ def _rot_y(a: float) -> np.ndarray:
     return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
 
 
-def thumb_cmc_rotation(cmc_deg: float, tilt: str = "ulnar") -> np.ndarray:
-    """R_palm_metacarpal at q_cmc = 0: columns (CMC axis u, metacarpal axis d, palmar z).
+def _turn(v: np.ndarray, k: np.ndarray, cos: float, sin: float) -> np.ndarray:
+    """v turned about the unit line k (right-hand rule) by the angle with this cos and sin.
 
-    METHOD §1: CMC axis a = (-sin c, cos c, 0) (ulnar tilt); the metacarpal points along
-    d = (cos c, sin c, 0); u = d × z = -a, so a positive CMC angle swings d toward +z.
+    Split into the part along k (kept) and across k (turned) so that vectors along or across
+    k stay exact: the first reading's matrices come out bit for bit as they always did.
     """
+    along = k * (k @ v)
+    across = v - along
+    return along + across * cos + np.cross(k, v) * sin
+
+
+def thumb_cmc_rotation(
+    cmc_deg: float, tilt: str = "ulnar", reading: ThumbReading | None = None
+) -> np.ndarray:
+    """R_palm_metacarpal at q_cmc = 0: columns (CMC axis u, metacarpal axis d, n_palmar z).
+
+    The hand file's reading (``ThumbReading``) gives the open metacarpal d0 and the way it
+    closes z0 at c = 0; c turns both by +c about ``cmc_tilt_line`` (-c for ``tilt='radial'``),
+    and u = d × z, so a positive CMC angle swings d toward z. The first reading
+    (``hand_models/imma_right_v1.toml``): d0 = +x, z0 = +z, line +z, which gives
+    a = (-sin c, cos c, 0) and d = (cos c, sin c, 0) (METHOD §1, docs/design.md).
+    """
+    r = reading if reading is not None else load_hand_dims().thumb.reading
     c = np.deg2rad(cmc_deg)
     sigma = 1.0 if tilt == "ulnar" else -1.0
-    d = np.array([np.cos(c), sigma * np.sin(c), 0.0])
-    z = np.array([0.0, 0.0, 1.0])
+    cos, sin = np.cos(c), sigma * np.sin(c)
+    d = _turn(r.rest_direction, r.cmc_tilt_line, cos, sin)
+    z = _turn(r.rest_closing_direction, r.cmc_tilt_line, cos, sin)
     u = np.cross(d, z)
     return np.stack([u, d, z], axis=1)
 
 
-def thumb_mcp_rotation(mcp_deg: float) -> np.ndarray:
+def thumb_mcp_rotation(mcp_deg: float, sense: float = 1.0) -> np.ndarray:
     """R_metacarpal_proximal at q = 0: the MCP axis is the CMC axis turned by m about the
-    metacarpal's long axis (+y), toward the metacarpal's palmar side (+z): (cos m, 0, sin m).
-    m = 0: MCP flexion coplanar with the CMC sweep; m = 90: perpendicular to it, the thumb
-    tip curling toward the fingers."""
-    return _rot_y(-np.deg2rad(mcp_deg))
+    metacarpal's long axis (+y). sense +1: toward the metacarpal's palmar side (+z), axis
+    (cos m, 0, sin m) (the first reading); sense -1: toward its dorsal side (cos m, 0, -sin m).
+    m = 0: MCP flexion coplanar with the CMC sweep. The open thumb stays straight: the
+    proximal phalanx continues the metacarpal whatever m is."""
+    return _rot_y(-np.deg2rad(mcp_deg) if sense > 0 else np.deg2rad(mcp_deg))
 
 
 class Hand:
@@ -93,8 +112,14 @@ class Hand:
         q_lo, q_hi = [], []
         thumb = dims.thumb
         placements = [
-            pin.SE3(thumb_cmc_rotation(design.cmc_deg, design.cmc_tilt), thumb.cmc_palm),
-            pin.SE3(thumb_mcp_rotation(design.mcp_deg), np.array([0.0, thumb.lengths[0], 0])),
+            pin.SE3(
+                thumb_cmc_rotation(design.cmc_deg, design.cmc_tilt, thumb.reading),
+                thumb.cmc_palm,
+            ),
+            pin.SE3(
+                thumb_mcp_rotation(design.mcp_deg, thumb.reading.mcp_sense),
+                np.array([0.0, thumb.lengths[0], 0]),
+            ),
             pin.SE3(np.eye(3), np.array([0.0, thumb.lengths[1], 0.0])),
         ]
         chains: list[tuple[str, list[pin.SE3], tuple[tuple[float, float], ...]]] = [
