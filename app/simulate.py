@@ -174,6 +174,13 @@ def simulate_base(
     return BaseGrasp(True, T, q, cs, stats.queries + n_q)
 
 
+def _n_main(kit: HandKit, T_distal: np.ndarray) -> np.ndarray:
+    """The thumb distal link's long axis from its pose (link +y unless the hand file's
+    reading builds the thumb oblique to its hinges: ``Hand.thumb_bones``)."""
+    b = kit.hand.thumb_bones[2]
+    return T_distal[:3, 1].copy() if b[1] == 1.0 else T_distal[:3, :3] @ b
+
+
 def simulate_thumb(
     kit: HandKit,
     obj: object,
@@ -186,7 +193,7 @@ def simulate_thumb(
     T = base.T_object_palm
     thumb = kit.chains["thumb"]
     if not base.approached:
-        n_main = (T @ kit.hand.link_poses(q)[thumb.link_indices[2]])[:3, 1]
+        n_main = _n_main(kit, T @ kit.hand.link_poses(q)[thumb.link_indices[2]])
         return Grasp(T, q, base.contacts, n_main, False, 0)
     closing = settings.closing
     stats = stats if stats is not None else ClosingStats()
@@ -214,7 +221,7 @@ def simulate_thumb(
         T,
         q,
         merge(base.contacts, cs),
-        T_links[idx[2]][:3, 1].copy(),
+        _n_main(kit, T_links[idx[2]]),
         True,
         stats.queries + n_q,
         tuple(stats.events),

@@ -132,10 +132,12 @@ def run_task(task: Task) -> list[tuple[int, str, GraspOutcome]]:
     bf = isinstance(hyps, BruteForceHypotheses)
     for i in task.gh:
         # the open thumb (part of the approach) depends on the CMC angle only: one base
-        # stage per (CMC angle, tilt), shared by every MCP angle (docs/cost-model.md)
-        bases: dict[tuple[float, str], BaseGrasp] = {}
+        # stage per (CMC angle, tilt), shared by every MCP angle (docs/cost-model.md);
+        # unless the hand file's reading bends the open thumb by m (then per design)
+        bases: dict[tuple[float, str, float], BaseGrasp] = {}
+        per_m = load_hand_dims().thumb.reading.open_thumb_depends_on_mcp
         for di, (d, kit) in enumerate(zip(task.designs, kits, strict=True)):
-            open_thumb = (d.cmc_deg, d.cmc_tilt)
+            open_thumb = (d.cmc_deg, d.cmc_tilt, d.mcp_deg if per_m else 0.0)
             base = bases.get(open_thumb)
             if base is None:
                 if isinstance(hyps, BruteForceHypotheses):

@@ -97,14 +97,37 @@ def format_report(a: dict) -> str:
     return "\n".join(lines)
 
 
+def format_grids(ours_csv: Path, published_csv: Path = DEFAULT_PUBLISHED) -> str:
+    """Per object and total: our S_GAS on the (CMC rows x MCP columns) grid, published below."""
+    ours = {(float(r["cmc_deg"]), float(r["mcp_deg"])): r for r in _rows(ours_csv)}
+    pub = {(float(r["cmc_deg"]), float(r["mcp_deg"])): r for r in _rows(published_csv)}
+    cs = sorted({k[0] for k in ours})
+    ms = sorted({k[1] for k in ours})
+    out = []
+    for name in [f"{o}_sgas" for o in OBJECTS] + [f"{o}_fc" for o in OBJECTS[3:]] + [
+        f"{o}_c" for o in OBJECTS[3:]
+    ] + ["total_sgas"]:
+        out.append(f"{name:18s} " + " ".join(f"{m:5g}" for m in ms))
+        for src, tag in ((ours, "ours"), (pub, "pub")):
+            for c in cs:
+                if not any((c, m) in src for m in ms):
+                    continue
+                vals = [f"{_col(src[(c, m)], name):5.1f}" if (c, m) in src else "    ." for m in ms]
+                out.append(f"  {tag:4s} c={c:<4g}       " + " ".join(vals))
+    return "\n".join(out)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("table", type=Path, help="a sweep's table.csv")
     ap.add_argument("--published", type=Path, default=DEFAULT_PUBLISHED)
     ap.add_argument("--json", action="store_true", help="print the figures as JSON")
+    ap.add_argument("--grids", action="store_true", help="also print per-object grids")
     args = ap.parse_args()
     a = agreement(args.table, args.published)
     print(json.dumps(a, indent=1) if args.json else format_report(a))
+    if args.grids:
+        print(format_grids(args.table, args.published))
 
 
 if __name__ == "__main__":

@@ -40,28 +40,48 @@ class FingerDims:
 class ThumbReading:
     """How the design angles (c, m) place the thumb's joint axes (docs/validation.md).
 
-    All vectors are unit vectors in the palm frame, for the open thumb (q = 0) at c = 0.
+    Vectors are in the palm frame, for the open hand (q = 0) at the design c = 0, m = 0.
     """
 
     rest_direction: np.ndarray
-    """(3,) long axis of the metacarpal (and of the straight open thumb), CMC toward MCP."""
-    rest_closing_direction: np.ndarray
-    """(3,) the way the metacarpal moves when the CMC joint closes (its ``n_palmar``),
-    perpendicular to ``rest_direction``; the CMC axis is rest_direction × this."""
+    """(3,) the straight open thumb's long axis (CMC toward the tip) at c = 0."""
+    cmc_axis: np.ndarray
+    """(3,) the CMC hinge axis at c = 0, signed: closing turns the thumb about it by the
+    right-hand rule."""
     cmc_tilt_line: np.ndarray
-    """(3,) c turns the whole metacarpal frame (CMC axis and open thumb) by +c about this
-    line (right-hand rule); ``cmc_tilt='radial'`` turns it by -c."""
+    """(3,) c turns the CMC axis by +c about this line (right-hand rule); ``cmc_tilt=
+    'radial'`` turns it by -c."""
+    bones_turn: bool
+    """True: the thumb's links are built perpendicular to their hinge axes and turn with
+    them (the metacarpal turns with c; the first reading). False: the links keep their rest
+    direction whatever the design; c and m only turn the hinge pins, which may then be
+    oblique to the links."""
+    mcp_turn_line: str
+    """'metacarpal': the MCP axis is the CMC axis turned by m about the metacarpal's long
+    axis (the open thumb stays straight); 'metacarpal_normal': turned about the metacarpal's
+    palmar normal, the proximal phalanx turning with it (the open thumb bends by m at the
+    MCP); 'cmc_tilt_line' (links that keep their rest direction only): turned about the
+    same line as c (so the MCP axis sits at c + m)."""
+
     mcp_sense: float
-    """+1: the MCP axis is the CMC axis turned by m about the metacarpal's long axis toward
-    the metacarpal's palmar side (the first reading); -1: toward its dorsal side."""
+    """+1 or -1: the sense in which m turns the MCP axis. With 'metacarpal', +1 is toward the
+    metacarpal's palmar side (the first reading); with 'metacarpal_normal' and
+    'cmc_tilt_line', +1 is the sense of c."""
+
+    @property
+    def open_thumb_depends_on_mcp(self) -> bool:
+        """Whether the open thumb's shape depends on m (then the approach does too)."""
+        return self.bones_turn and self.mcp_turn_line == "metacarpal_normal"
 
 
 #: The first reading (``hand_models/imma_right_v1.toml``): the defaults for a hand file
 #: without these keys.
 V1_READING = {
     "rest_direction": [1.0, 0.0, 0.0],
-    "rest_closing_direction": [0.0, 0.0, 1.0],
+    "cmc_axis": [0.0, -1.0, 0.0],
     "cmc_tilt_line": [0.0, 0.0, 1.0],
+    "bones_turn": True,
+    "mcp_turn_line": "metacarpal",
     "mcp_sense": 1,
 }
 
@@ -174,12 +194,23 @@ def _load_hand_dims(p: Path) -> HandDims:
     r = {k: t.get(k, v) for k, v in V1_READING.items()}
     reading = ThumbReading(
         rest_direction=_unit(r["rest_direction"], "rest_direction", p),
-        rest_closing_direction=_unit(r["rest_closing_direction"], "rest_closing_direction", p),
+        cmc_axis=_unit(r["cmc_axis"], "cmc_axis", p),
         cmc_tilt_line=_unit(r["cmc_tilt_line"], "cmc_tilt_line", p),
+        bones_turn=bool(r["bones_turn"]),
+        mcp_turn_line=str(r["mcp_turn_line"]),
         mcp_sense=float(r["mcp_sense"]),
     )
-    if abs(float(reading.rest_direction @ reading.rest_closing_direction)) > 1e-9:
-        raise HandbenchError(f"{p}: thumb.rest_closing_direction must be ⟂ rest_direction")
+    if reading.bones_turn and abs(float(reading.rest_direction @ reading.cmc_axis)) > 1e-9:
+        raise HandbenchError(f"{p}: with bones_turn, thumb.cmc_axis must be ⟂ rest_direction")
+    turn_lines = ("metacarpal", "metacarpal_normal") if reading.bones_turn else (
+        "metacarpal",
+        "cmc_tilt_line",
+    )
+    if reading.mcp_turn_line not in turn_lines:
+        raise HandbenchError(
+            f"{p}: thumb.mcp_turn_line must be one of {turn_lines} "
+            f"(bones_turn = {reading.bones_turn}), got {reading.mcp_turn_line!r}"
+        )
     if reading.mcp_sense not in (1.0, -1.0):
         raise HandbenchError(f"{p}: thumb.mcp_sense must be 1 or -1, got {r['mcp_sense']!r}")
     return HandDims(
