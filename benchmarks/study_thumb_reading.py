@@ -104,9 +104,12 @@ def format_grids(ours_csv: Path, published_csv: Path = DEFAULT_PUBLISHED) -> str
     cs = sorted({k[0] for k in ours})
     ms = sorted({k[1] for k in ours})
     out = []
-    for name in [f"{o}_sgas" for o in OBJECTS] + [f"{o}_fc" for o in OBJECTS[3:]] + [
-        f"{o}_c" for o in OBJECTS[3:]
-    ] + ["total_sgas"]:
+    for name in (
+        [f"{o}_sgas" for o in OBJECTS]
+        + [f"{o}_fc" for o in OBJECTS[3:]]
+        + [f"{o}_c" for o in OBJECTS[3:]]
+        + ["total_sgas"]
+    ):
         out.append(f"{name:18s} " + " ".join(f"{m:5g}" for m in ms))
         for src, tag in ((ours, "ours"), (pub, "pub")):
             for c in cs:

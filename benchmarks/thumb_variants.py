@@ -38,17 +38,31 @@ def normal_of_raised(g_deg: float) -> list[float]:
 
 
 #: name -> (description, thumb keys). Missing keys keep the first reading's value.
-V1 = {"rest_direction": [1, 0, 0], "cmc_axis": [0, -1, 0], "cmc_tilt_line": [0, 0, 1],
-      "bones_turn": True, "mcp_turn_line": "metacarpal", "mcp_sense": 1,
-      "cmc": [30.0, 18.0, 0.0], "limits": HUMAN}
+V1 = {
+    "rest_direction": [1, 0, 0],
+    "cmc_axis": [0, -1, 0],
+    "cmc_tilt_line": [0, 0, 1],
+    "bones_turn": True,
+    "mcp_turn_line": "metacarpal",
+    "mcp_sense": 1,
+    "cmc": [30.0, 18.0, 0.0],
+    "limits": HUMAN,
+}
 
 
 def pins(beta: float, **kw) -> dict:
     """Bones fixed along the palm plane at beta from +y; c and m turn the hinge pins in the
     palm plane (about the palm normal), c ulnar from the proximal-distal axis, MCP at c + m."""
-    return {**V1, "rest_direction": inplane(beta), "cmc_axis": [0, -1, 0],
-            "cmc_tilt_line": [0, 0, 1], "bones_turn": False, "mcp_turn_line": "cmc_tilt_line",
-            "mcp_sense": 1, **kw}
+    return {
+        **V1,
+        "rest_direction": inplane(beta),
+        "cmc_axis": [0, -1, 0],
+        "cmc_tilt_line": [0, 0, 1],
+        "bones_turn": False,
+        "mcp_turn_line": "cmc_tilt_line",
+        "mcp_sense": 1,
+        **kw,
+    }
 
 
 VARIANTS: dict[str, tuple[str, dict]] = {
@@ -91,13 +105,21 @@ VARIANTS: dict[str, tuple[str, dict]] = {
     ),
     "K_A_g30_cmc45": (
         "I_A_cmc45 with the open metacarpal raised 30 deg palmar (thenar rest)",
-        {**V1, "rest_direction": raised(30), "cmc_tilt_line": [-v for v in raised(30)],
-         "limits": [[0, 45], [0, 90], [0, 90]]},
+        {
+            **V1,
+            "rest_direction": raised(30),
+            "cmc_tilt_line": [-v for v in raised(30)],
+            "limits": [[0, 45], [0, 90], [0, 90]],
+        },
     ),
     "K_A_g45_wide": (
         "A with the open metacarpal raised 45 deg palmar, CMC 0-45, MCP/IP 0-90",
-        {**V1, "rest_direction": raised(45), "cmc_tilt_line": [-v for v in raised(45)],
-         "limits": [[0, 45], [0, 90], [0, 90]]},
+        {
+            **V1,
+            "rest_direction": raised(45),
+            "cmc_tilt_line": [-v for v in raised(45)],
+            "limits": [[0, 45], [0, 90], [0, 90]],
+        },
     ),
     "D_wide": (
         "D (CMC axis leaning radially) with MCP/IP 0-90",
@@ -125,8 +147,13 @@ VARIANTS: dict[str, tuple[str, dict]] = {
     "O_normal_g45_wide": (
         "N_normal with the open metacarpal raised 45 deg palmar (c and m about its palmar "
         "normal), CMC 0-45, MCP/IP 0-90",
-        {**V1, "rest_direction": raised(45), "cmc_tilt_line": normal_of_raised(45),
-         "mcp_turn_line": "metacarpal_normal", "limits": [[0, 45], [0, 90], [0, 90]]},
+        {
+            **V1,
+            "rest_direction": raised(45),
+            "cmc_tilt_line": normal_of_raised(45),
+            "mcp_turn_line": "metacarpal_normal",
+            "limits": [[0, 45], [0, 90], [0, 90]],
+        },
     ),
     "C_pins_b45": ("bones fixed at 45 deg from y; pins turn in the palm plane", pins(45)),
     "C_pins_b60": ("bones fixed at 60 deg from y; pins turn in the palm plane", pins(60)),
@@ -148,8 +175,9 @@ def _toml(v) -> str:
 def render(name: str, desc: str, k: dict) -> str:
     s = BASE.read_text()
     s = s.replace('name = "imma_right_v1"', f'name = "study_{name}"')
-    s = re.sub(r"# VARIANT v1:.*?imma_right.toml\.\n", f"# STUDY VARIANT {name}: {desc}\n", s,
-               flags=re.S)
+    s = re.sub(
+        r"# VARIANT v1:.*?imma_right.toml\.\n", f"# STUDY VARIANT {name}: {desc}\n", s, flags=re.S
+    )
     s = s.replace("[DESIGN, first reading, docs/design.md]", f"[STUDY {name}]")
     s = re.sub(r"^ {20,}#.*\n", "", s, flags=re.M)  # continuation comments of v1's keys
     for key, v in k.items():

@@ -202,9 +202,13 @@ def _load_hand_dims(p: Path) -> HandDims:
     )
     if reading.bones_turn and abs(float(reading.rest_direction @ reading.cmc_axis)) > 1e-9:
         raise HandbenchError(f"{p}: with bones_turn, thumb.cmc_axis must be ⟂ rest_direction")
-    turn_lines = ("metacarpal", "metacarpal_normal") if reading.bones_turn else (
-        "metacarpal",
-        "cmc_tilt_line",
+    turn_lines = (
+        ("metacarpal", "metacarpal_normal")
+        if reading.bones_turn
+        else (
+            "metacarpal",
+            "cmc_tilt_line",
+        )
     )
     if reading.mcp_turn_line not in turn_lines:
         raise HandbenchError(
