@@ -131,6 +131,11 @@ VARIANTS: dict[str, tuple[str, dict]] = {
         "so the MCP axis there sits at c + m",
         {**V1, "cmc_tilt_line": [0, 0, -1], "limits": [[0, 90], [0, 90], [0, 90]]},
     ),
+    "Q_D_cmc100_wide": (
+        "P_D_cmc90_wide with CMC 0-100: the abducted thumb may lean 10 deg past the palm "
+        "normal toward the palm's middle",
+        {**V1, "cmc_tilt_line": [0, 0, -1], "limits": [[0, 100], [0, 90], [0, 90]]},
+    ),
     "L_D_cmc45": (
         "D (CMC axis leaning radially) with CMC 0-45, MCP/IP 0-90",
         {**V1, "cmc_tilt_line": [0, 0, -1], "limits": [[0, 45], [0, 90], [0, 90]]},
