@@ -113,9 +113,9 @@ def main() -> None:
     # JIT: compile (or load numba's on-disk cache) once before timing
     obj0, hy0 = load_object(OBJECT_KEYS[0]), cached_hypotheses(OBJECT_KEYS[0])
     k0 = cached_kit(0.0, 45.0, "ulnar")
-    _run(k0, base_kit(0.0, "ulnar"), obj0, hy0, 0, sF)
+    _run(k0, base_kit(ThumbDesign(0.0, 0.0)), obj0, hy0, 0, sF)
     t0 = time.perf_counter()
-    _run(k0, base_kit(0.0, "ulnar"), obj0, hy0, 0, sC)
+    _run(k0, base_kit(ThumbDesign(0.0, 0.0)), obj0, hy0, 0, sC)
     dt = time.perf_counter() - t0
     print(f"first compiled hypothesis (numba import + JIT or its disk cache): {dt:.1f} s")
     tot: dict[str, float] = defaultdict(float)
@@ -132,7 +132,7 @@ def main() -> None:
         t = {"fcl": 0.0, "compiled": 0.0, "fcl_c": 0.0, "compiled_c": 0.0}
         for d in designs:
             kit = cached_kit(d.cmc_deg, d.mcp_deg, d.cmc_tilt)
-            bkit = base_kit(d.cmc_deg, d.cmc_tilt)
+            bkit = base_kit(d)
             for i in idx:
                 gf, of, tf, cf = _run(kit, bkit, obj, hyps, i, sF)
                 gc, oc, tc, cc = _run(kit, bkit, obj, hyps, i, sC)

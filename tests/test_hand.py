@@ -10,14 +10,19 @@ import pytest
 from app.errors import DesignError
 from app.model.design import ThumbDesign, published_designs
 from app.model.hand.chains import finger_chains
-from app.model.hand.data import load_hand_dims
+from app.model.hand.data import HAND_ENV, data_root, load_hand_dims
 from app.model.hand.geometry import CapsuleShape
 from app.model.hand.model import FINGER_JOINTS, FINGER_LINKS, build_hand
 
 RNG = np.random.default_rng(7)
+#: The first reading of the design angles, kept as a named variant (docs/validation.md).
+V1 = data_root() / "hand_models" / "imma_right_v1.toml"
+#: A screened reading whose thumb links are oblique to their hinges (bones_turn = false).
+OBLIQUE = data_root() / "hand_models" / "study" / "C_pins_b45.toml"
 
 
-def line_angle_deg(a: np.ndarray, b: np.ndarray) -> float:
+def line_angle_deg(a: np.typing.ArrayLike, b: np.typing.ArrayLike) -> float:
+    a, b = np.asarray(a, float), np.asarray(b, float)
     c = abs(a @ b) / (np.linalg.norm(a) * np.linalg.norm(b))
     return math.degrees(math.acos(min(1.0, c)))
 
@@ -26,9 +31,10 @@ def random_q(hand) -> np.ndarray:
     return RNG.uniform(hand.q_lower, hand.q_upper)
 
 
-def test_segment_lengths_match_the_data_file() -> None:
-    dims = load_hand_dims()
-    hand = build_hand(15, 60)
+@pytest.mark.parametrize("path", [None, V1, OBLIQUE])
+def test_segment_lengths_match_the_data_file(path) -> None:
+    dims = load_hand_dims(path)
+    hand = build_hand(15, 60, model_path=path)
     for _ in range(5):
         q = random_q(hand)
         p, _ = hand.joint_axes(q)
@@ -46,9 +52,12 @@ def test_segment_lengths_match_the_data_file() -> None:
         assert np.linalg.norm(tip - p[t[2]]) == pytest.approx(dims.thumb.lengths[2])
 
 
+@pytest.mark.parametrize("path", [None, V1])
 @pytest.mark.parametrize("design", published_designs()[::3] + [ThumbDesign(12.3, 71.9)])
-def test_axis_angles_equal_the_design_angles(design: ThumbDesign) -> None:
-    hand = build_hand(design.cmc_deg, design.mcp_deg)
+def test_axis_angles_equal_the_design_angles(design: ThumbDesign, path) -> None:
+    """Both readings: c = angle(CMC axis, palm +y), the CMC axis in the palm plane,
+    m = angle(MCP axis, CMC axis), IP parallel to MCP, at any joint configuration."""
+    hand = build_hand(design.cmc_deg, design.mcp_deg, model_path=path)
     y = np.array([0.0, 1.0, 0.0])
     for q in (hand.q_open, random_q(hand), random_q(hand)):
         _, a = hand.joint_axes(q)
@@ -59,32 +68,104 @@ def test_axis_angles_equal_the_design_angles(design: ThumbDesign) -> None:
         assert line_angle_deg(ip, mcp) == pytest.approx(0.0, abs=1e-6)  # IP parallel to MCP
 
 
-def test_cmc_tilt_direction_and_open_metacarpal() -> None:
+def test_default_reading_cmc_leans_radially_and_open_thumb() -> None:
+    """The default reading: the CMC axis's distal end leans radially (+x) by c; the open
+    metacarpal lies across it in the palm plane, along (cos c, -sin c, 0)."""
+    for c in (15.0, 30.0, 45.0):
+        hand = build_hand(c, 0)
+        _, a = hand.joint_axes(hand.q_open)
+        assert np.sign(a[0][0]) == np.sign(a[0][1])  # line (sin c, cos c, 0)
+        T = hand.link_poses(hand.q_open)[hand.link_index["thumb_metacarpal"]]
+        cr, sr = math.cos(math.radians(c)), math.sin(math.radians(c))
+        assert np.allclose(T[:3, 1], [cr, -sr, 0])
+
+
+def test_default_reading_mcp_axis_depends_on_c_plus_m_when_abducted() -> None:
+    """The published clue: the MCP axis's orientation in the palm behaves like c + m. With
+    the CMC closed 90 deg the metacarpal lies along the palm normal, the line c turns
+    about, so designs with the same c + m have the same MCP axis there."""
+    for total in (45.0, 75.0, 90.0, 105.0):
+        axes = []
+        for c in (c for c in (0.0, 15.0, 30.0, 45.0) if 0 <= total - c <= 90):
+            hand = build_hand(c, total - c)
+            q = hand.q_open.copy()
+            q[0] = np.deg2rad(90.0)
+            p, a = hand.joint_axes(q)
+            assert np.allclose(p[1] - p[0], [0, 0, hand.dims.thumb.lengths[0]])
+            axes.append(a[1])
+            # in the palm plane, at c + m from the proximal-distal axis
+            assert line_angle_deg(a[1], [0, 1, 0]) == pytest.approx(min(total, 180 - total))
+        assert np.allclose(axes, axes[0], atol=1e-12)
+    # the first reading turns them the opposite ways: c - m
+    h1, h2 = build_hand(0, 60, model_path=V1), build_hand(30, 30, model_path=V1)
+    q = h1.q_open.copy()
+    q[0] = np.deg2rad(90.0)
+    assert not np.allclose(h1.joint_axes(q)[1][1], h2.joint_axes(q)[1][1])
+
+
+def test_cmc_tilt_direction_and_open_metacarpal_v1() -> None:
     c = 30.0
-    ulnar = build_hand(c, 0)
+    ulnar = build_hand(c, 0, model_path=V1)
     _, a = ulnar.joint_axes(ulnar.q_open)
     # METHOD §1: a = (-sin c, cos c, 0) up to sign: distal end leans ulnar (-x)
     assert np.allclose(np.abs(a[0]), [math.sin(math.radians(c)), math.cos(math.radians(c)), 0])
     assert np.sign(a[0][0]) != np.sign(a[0][1])
     T = ulnar.link_poses(ulnar.q_open)[ulnar.link_index["thumb_metacarpal"]]
     assert np.allclose(T[:3, 1], [math.cos(math.radians(c)), math.sin(math.radians(c)), 0])
-    radial = build_hand(c, 0, cmc_tilt="radial")
+    radial = build_hand(c, 0, cmc_tilt="radial", model_path=V1)
     _, a2 = radial.joint_axes(radial.q_open)
     assert np.sign(a2[0][0]) == np.sign(a2[0][1])
 
 
-def test_closing_the_cmc_swings_the_thumb_palmar() -> None:
-    hand = build_hand(0, 45)
+def test_cmc_tilt_radial_mirrors_c() -> None:
+    """``cmc_tilt='radial'`` turns the CMC axis the other way about the same line."""
+    for path in (None, V1):
+        a = build_hand(30, 45, model_path=path)
+        b = build_hand(30, 45, cmc_tilt="radial", model_path=path)
+        ya, yb = (h.joint_axes(h.q_open)[1][0] for h in (a, b))
+        line = a.dims.thumb.reading.cmc_tilt_line
+        assert line_angle_deg(ya, [0, 1, 0]) == pytest.approx(30, abs=1e-9)
+        assert line_angle_deg(yb, [0, 1, 0]) == pytest.approx(30, abs=1e-9)
+        assert not np.allclose(ya, yb) and not np.allclose(ya, -yb)
+        assert ya @ line == pytest.approx(yb @ line, abs=1e-12)
+
+
+def test_hand_file_is_selected_by_the_environment(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv(HAND_ENV, "imma_right_v1")
+    assert load_hand_dims().path == V1
+    assert load_hand_dims().name == "imma_right_v1"
+    monkeypatch.setenv(HAND_ENV, str(V1))
+    assert load_hand_dims().path == V1
+    monkeypatch.delenv(HAND_ENV)
+    assert load_hand_dims().path.name == "imma_right.toml"
+
+
+def test_v1_file_is_the_first_reading() -> None:
+    """The variant file reproduces the first reading's placements (docs/validation.md)."""
+    for c, m in ((0, 0), (15, 60), (45, 90)):
+        hand = build_hand(c, m, model_path=V1)
+        cr, sr = math.cos(math.radians(c)), math.sin(math.radians(c))
+        R1 = hand.model.jointPlacements[1].rotation
+        assert np.array_equal(R1[:, 1], [cr, sr, 0.0])  # metacarpal (cos c, sin c, 0)
+        cm, sm = math.cos(math.radians(m)), math.sin(math.radians(m))
+        R2 = hand.model.jointPlacements[2].rotation
+        assert np.allclose(R2[:, 0], [cm, 0, sm])  # MCP axis toward the metacarpal's +z
+
+
+@pytest.mark.parametrize("path", [None, V1])
+def test_closing_the_cmc_swings_the_thumb_palmar(path) -> None:
+    hand = build_hand(0, 45, model_path=path)
     q = hand.q_open.copy()
     tip0 = hand.fingertip_palm("thumb", q)
-    q[0] = np.deg2rad(60)
-    assert hand.fingertip_palm("thumb", q)[2] > tip0[2] + 40
+    q[0] = hand.q_upper[0]
+    assert hand.fingertip_palm("thumb", q)[2] > tip0[2] + 20
 
 
+@pytest.mark.parametrize("path", [None, OBLIQUE])
 @pytest.mark.parametrize("design", [(0, 0), (30, 75), (45, 90)])
-def test_palmar_normals_point_the_way_the_joint_closes(design: tuple[float, float]) -> None:
+def test_palmar_normals_point_the_way_the_joint_closes(design: tuple[float, float], path) -> None:
     """Finite differences: closing joint k moves its link's surface along n_palmar."""
-    hand = build_hand(*design)
+    hand = build_hand(*design, model_path=path)
     for _ in range(4):
         q = random_q(hand)
         q = np.clip(q, hand.q_lower, hand.q_upper - 1e-3)
@@ -101,8 +182,9 @@ def test_palmar_normals_point_the_way_the_joint_closes(design: tuple[float, floa
     assert np.allclose(hand.n_palmar_palm(hand.q_open)[0], [0, 0, 1])
 
 
-def test_thumb_n_main_is_the_distal_long_axis() -> None:
-    hand = build_hand(15, 30)
+@pytest.mark.parametrize("path", [None, OBLIQUE])
+def test_thumb_n_main_is_the_distal_long_axis(path) -> None:
+    hand = build_hand(15, 30, model_path=path)
     q = random_q(hand)
     p, _ = hand.joint_axes(q)
     tip = hand.fingertip_palm("thumb", q)
@@ -126,8 +208,9 @@ def test_collision_shapes_enclose_the_visual_links() -> None:
             assert (v >= s.lo_link - 1e-9).all() and (v <= s.hi_link + 1e-9).all()
 
 
-def test_fast_chains_agree_with_pinocchio() -> None:
-    hand = build_hand(33.3, 12.1)
+@pytest.mark.parametrize("path", [None, OBLIQUE])
+def test_fast_chains_agree_with_pinocchio(path) -> None:
+    hand = build_hand(33.3, 12.1, model_path=path)
     chains = finger_chains(hand)
     for _ in range(5):
         q = random_q(hand)

@@ -80,8 +80,8 @@ def test_thumb_cmc_stage_shared_across_mcp_designs_changes_nothing(cmc: float) -
 
 
 def test_base_kit_is_one_kit_per_cmc_angle() -> None:
-    k = base_kit(30.0, "ulnar")
-    assert k is base_kit(30.0, "ulnar")
+    k = base_kit(ThumbDesign(30.0, 75.0))
+    assert k is base_kit(ThumbDesign(30.0, 15.0))
     assert (k.hand.design.cmc_deg, k.hand.design.mcp_deg) == (30.0, BASE_MCP_DEG)
 
 

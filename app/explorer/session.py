@@ -347,7 +347,7 @@ class Session:
         i = self.gh
         s = self.settings
         d = self.design
-        rep = replay(self.kit, self.obj, self.hyps, i, s, base_kit=base_kit(d.cmc_deg, d.cmc_tilt))
+        rep = replay(self.kit, self.obj, self.hyps, i, s, base_kit=base_kit(d))
         out = judge(rep.grasp, self.obj, s, rep.base.queries + rep.grasp.queries)
         self.last, self.outcome = rep, out
         g = rep.grasp

@@ -70,7 +70,7 @@ def render_grasp(
     hyps = cached_hypotheses(key)
     i = hyps.index_of(gh)
     kit = cached_kit(design.cmc_deg, design.mcp_deg, design.cmc_tilt)
-    base = simulate_base(base_kit(design.cmc_deg, design.cmc_tilt), obj, hyps, i, s)
+    base = simulate_base(base_kit(design), obj, hyps, i, s)
     grasp = simulate_thumb(kit, obj, base, s)
     out = judge(grasp, obj, s, 0)
     verdict = (

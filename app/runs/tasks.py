@@ -18,7 +18,14 @@ from app.runs.keys import design_key, set_object_key
 from app.runs.store import ResultStore
 from app.sim.bruteforce import ALL_FINGERS, BruteForceHypotheses
 from app.sim.hypothesis_sets import hypotheses_of
-from app.sim.simulate import BaseGrasp, base_kit, cached_kit, simulate_base, simulate_thumb
+from app.sim.simulate import (
+    BaseGrasp,
+    base_kit,
+    base_mcp_deg,
+    cached_kit,
+    simulate_base,
+    simulate_thumb,
+)
 
 #: Hypotheses per task: small enough for a live progress bar, large enough to amortise.
 DEFAULT_CHUNK = 60
@@ -63,12 +70,12 @@ def run_task(
         # the open thumb (part of the approach) depends on the CMC angle only: one base
         # stage per (CMC angle, tilt), shared by every MCP angle (docs/cost-model.md), always
         # computed by the same kit (``base_kit``) whatever designs share the task
-        bases: dict[tuple[float, str], BaseGrasp] = {}
+        bases: dict[tuple[float, str, float], BaseGrasp] = {}
         for di, (d, kit) in enumerate(zip(task.designs, kits, strict=True)):
-            open_thumb = (d.cmc_deg, d.cmc_tilt)
+            open_thumb = (d.cmc_deg, d.cmc_tilt, base_mcp_deg(d))
             base = bases.get(open_thumb)
             if base is None:
-                bk = base_kit(d.cmc_deg, d.cmc_tilt)
+                bk = base_kit(d)
                 if isinstance(hyps, BruteForceHypotheses):
                     base = simulate_base(bk, obj, hyps.approach_line(i), i, s, fingers=ALL_FINGERS)
                 else:

@@ -270,6 +270,13 @@ def _thumb_obstacles(
     return Obstacles(objs, len(pieces), mask, spheres, arrays)
 
 
+def _n_main(kit: HandKit, T_distal: np.ndarray) -> np.ndarray:
+    """The thumb distal link's long axis from its pose (link +y unless the hand file's
+    reading builds the thumb oblique to its hinges: ``Hand.thumb_bones``)."""
+    b = kit.hand.thumb_bones[2]
+    return T_distal[:3, 1].copy() if b[1] == 1.0 else T_distal[:3, :3] @ b
+
+
 def simulate_thumb(
     kit: HandKit,
     obj: GraspTarget,
@@ -282,7 +289,7 @@ def simulate_thumb(
     T = base.T_object_palm
     thumb = kit.chains["thumb"]
     if not base.approached:
-        n_main = (T @ kit.hand.link_poses(q)[thumb.link_indices[2]])[:3, 1]
+        n_main = _n_main(kit, T @ kit.hand.link_poses(q)[thumb.link_indices[2]])
         return Grasp(T, q, base.contacts, n_main, False, 0)
     closing = settings.closing
     stats = stats if stats is not None else ClosingStats()
@@ -297,7 +304,7 @@ def simulate_thumb(
         T,
         q,
         merge(base.contacts, cs),
-        T_links[idx[2]][:3, 1].copy(),
+        _n_main(kit, T_links[idx[2]]),
         True,
         stats.queries + n_q,
         tuple(stats.events),
@@ -311,13 +318,23 @@ def cached_kit(cmc_deg: float, mcp_deg: float, tilt: str) -> HandKit:
 
 
 #: The MCP angle of the kit that computes a design's base stage. With MCP and IP open the
-#: thumb's capsules lie on the metacarpal's line, so the base stage (approach, back-off, long
-#: fingers, and the memo of the thumb's CMC stage) is the same for every MCP angle up to
-#: rounding; computing it always with one kit makes every result independent of which other
-#: designs were simulated beside it (a sweep's task grouping, the explorer's replay).
+#: thumb's capsules lie on the metacarpal's line (for a hand file whose reading keeps the open
+#: thumb straight), so the base stage (approach, back-off, long fingers, and the memo of the
+#: thumb's CMC stage) is the same for every MCP angle up to rounding; computing it always with
+#: one kit makes every result independent of which other designs were simulated beside it (a
+#: sweep's task grouping, the explorer's replay).
 BASE_MCP_DEG = 0.0
 
 
-def base_kit(cmc_deg: float, tilt: str) -> HandKit:
-    """The kit that computes the base stage of every design with this CMC angle and tilt."""
-    return cached_kit(cmc_deg, BASE_MCP_DEG, tilt)
+def base_mcp_deg(design: ThumbDesign) -> float:
+    """The MCP angle of the kit that computes ``design``'s base stage: ``BASE_MCP_DEG``, or
+    the design's own when the default hand file bends the open thumb by m."""
+    if load_hand_dims().thumb.reading.open_thumb_depends_on_mcp:
+        return design.mcp_deg
+    return BASE_MCP_DEG
+
+
+def base_kit(design: ThumbDesign) -> HandKit:
+    """The kit that computes the base stage of ``design`` (shared by every design with the
+    same CMC angle and tilt, unless the open thumb depends on m)."""
+    return cached_kit(design.cmc_deg, base_mcp_deg(design), design.cmc_tilt)

@@ -17,7 +17,7 @@ import trimesh
 
 from app.model.contact_set import LINK_NAMES, LONG_FINGERS, PHALANGES, THUMB_LINKS
 from app.model.design import ThumbDesign
-from app.model.hand.data import HandDims, load_hand_dims
+from app.model.hand.data import HandDims, ThumbReading, load_hand_dims
 from app.model.hand.geometry import BoxShape, CapsuleShape, Shape
 
 JOINT_NAMES = ("thumb_cmc", "thumb_mcp", "thumb_ip") + tuple(
@@ -56,26 +56,107 @@ def _rot_y(a: float) -> np.ndarray:
     return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
 
 
-def thumb_cmc_rotation(cmc_deg: float, tilt: str = "ulnar") -> np.ndarray:
-    """R_palm_metacarpal at q_cmc = 0: columns (CMC axis u, metacarpal axis d, palmar z).
+def _turn(v: np.ndarray, k: np.ndarray, cos: float, sin: float) -> np.ndarray:
+    """v turned about the unit line k (right-hand rule) by the angle with this cos and sin.
 
-    METHOD §1: CMC axis a = (-sin c, cos c, 0) (ulnar tilt); the metacarpal points along
-    d = (cos c, sin c, 0); u = d × z = -a, so a positive CMC angle swings d toward +z.
+    Split into the part along k (kept) and across k (turned) so that vectors along or across
+    k stay exact: the first reading's matrices come out bit for bit as they always did.
     """
+    along = k * (k @ v)
+    across = v - along
+    return along + across * cos + np.cross(k, v) * sin
+
+
+def _rot_z(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+
+def thumb_cmc_rotation(
+    cmc_deg: float, tilt: str = "ulnar", reading: ThumbReading | None = None
+) -> np.ndarray:
+    """R_palm_metacarpal at q_cmc = 0: columns (CMC axis u, metacarpal axis d, n_palmar z).
+
+    For a reading whose links turn with their hinges (``bones_turn``): the hand file gives
+    the open metacarpal d0 and the CMC axis a0 ⟂ d0 at c = 0, so the metacarpal closes
+    toward z0 = a0 × d0; c turns d0 and z0 by +c about ``cmc_tilt_line`` (-c for
+    ``tilt='radial'``), and u = d × z, so a positive CMC angle swings d toward z. The first reading
+    (``hand_models/imma_right_v1.toml``): d0 = +x, z0 = +z, line +z, which gives
+    a = (-sin c, cos c, 0) and d = (cos c, sin c, 0) (METHOD §1, docs/design.md).
+    """
+    r = reading if reading is not None else load_hand_dims().thumb.reading
     c = np.deg2rad(cmc_deg)
     sigma = 1.0 if tilt == "ulnar" else -1.0
-    d = np.array([np.cos(c), sigma * np.sin(c), 0.0])
-    z = np.array([0.0, 0.0, 1.0])
+    cos, sin = np.cos(c), sigma * np.sin(c)
+    d = _turn(r.rest_direction, r.cmc_tilt_line, cos, sin)
+    z0 = np.cross(r.cmc_axis, r.rest_direction) + 0.0  # (+0.0: no signed zeros)
+    z = _turn(z0, r.cmc_tilt_line, cos, sin)
     u = np.cross(d, z)
     return np.stack([u, d, z], axis=1)
 
 
-def thumb_mcp_rotation(mcp_deg: float) -> np.ndarray:
+def thumb_mcp_rotation(mcp_deg: float, sense: float = 1.0) -> np.ndarray:
     """R_metacarpal_proximal at q = 0: the MCP axis is the CMC axis turned by m about the
-    metacarpal's long axis (+y), toward the metacarpal's palmar side (+z): (cos m, 0, sin m).
-    m = 0: MCP flexion coplanar with the CMC sweep; m = 90: perpendicular to it, the thumb
-    tip curling toward the fingers."""
-    return _rot_y(-np.deg2rad(mcp_deg))
+    metacarpal's long axis (+y). sense +1: toward the metacarpal's palmar side (+z), axis
+    (cos m, 0, sin m) (the first reading); sense -1: toward its dorsal side (cos m, 0, -sin m).
+    m = 0: MCP flexion coplanar with the CMC sweep. The open thumb stays straight: the
+    proximal phalanx continues the metacarpal whatever m is."""
+    return _rot_y(-np.deg2rad(mcp_deg) if sense > 0 else np.deg2rad(mcp_deg))
+
+
+@dataclass(frozen=True)
+class ThumbFrames:
+    """The thumb's joint placements at q = 0 for one design, and its links' long axes."""
+
+    R_palm_metacarpal: np.ndarray
+    """(3, 3) CMC joint frame (x = CMC axis, z = ``n_palmar``) in the palm frame."""
+    R_metacarpal_proximal: np.ndarray
+    """(3, 3) MCP joint frame in the metacarpal frame."""
+    bones: np.ndarray
+    """(3, 3) unit long axis of the metacarpal, proximal and distal link in its own link
+    frame: +y when the link is built perpendicular to its hinge, else oblique (in the
+    link's x-y plane, so +z stays the way the link's surface moves when its joint closes)."""
+
+
+def _hinge_frame(axis: np.ndarray, bone: np.ndarray, palmar: np.ndarray) -> np.ndarray:
+    """R_palm_link of a link along ``bone`` hinged on ``axis``: x = the axis, signed so that
+    closing moves the link toward ``palmar``; z = x × bone (normalised), y = z × x."""
+    z = np.cross(axis, bone)
+    n = float(np.linalg.norm(z))
+    if n < 1e-9:  # hinge along the link: it only spins the link; keep the palmar side
+        z, n = palmar - bone * (bone @ palmar), 1.0
+        n = float(np.linalg.norm(z))
+    z = z / n
+    if z @ palmar < 0.0:
+        axis, z = -axis, -z
+    return np.stack([axis, np.cross(z, axis), z], axis=1)
+
+
+def thumb_frames(design: ThumbDesign, reading: ThumbReading) -> ThumbFrames:
+    """The thumb's joint placements for design (c, m) under a hand file's reading."""
+    y = np.array([0.0, 1.0, 0.0])
+    if reading.bones_turn:
+        R1 = thumb_cmc_rotation(design.cmc_deg, design.cmc_tilt, reading)
+        if reading.mcp_turn_line == "metacarpal_normal":
+            R2 = _rot_z(reading.mcp_sense * np.deg2rad(design.mcp_deg))
+        else:
+            R2 = thumb_mcp_rotation(design.mcp_deg, reading.mcp_sense)
+        return ThumbFrames(R1, R2, np.stack([y, y, y]))
+    sigma = 1.0 if design.cmc_tilt == "ulnar" else -1.0
+    c, m = np.deg2rad(design.cmc_deg), np.deg2rad(design.mcp_deg)
+    k, d = reading.cmc_tilt_line, reading.rest_direction
+    a_c = _turn(reading.cmc_axis, k, np.cos(c), sigma * np.sin(c))
+    # the CMC closes the way the hand file signs its axis (a_c × d); along d: palm +z
+    ad = np.cross(a_c, d)
+    R1 = _hinge_frame(a_c, d, ad if np.linalg.norm(ad) > 1e-9 else np.array([0.0, 0.0, 1.0]))
+    if reading.mcp_turn_line == "cmc_tilt_line":
+        phi = sigma * c + reading.mcp_sense * m
+        a_m = _turn(reading.cmc_axis, k, np.cos(phi), np.sin(phi))
+    else:  # about the metacarpal, toward its palmar side for sense +1
+        a_m = _turn(a_c, d, np.cos(m), -reading.mcp_sense * np.sin(m))
+    R2_palm = _hinge_frame(a_m, d, R1[:, 2])
+    bones = np.stack([R1.T @ d, R2_palm.T @ d, R2_palm.T @ d])
+    return ThumbFrames(R1, R1.T @ R2_palm, bones)
 
 
 class Hand:
@@ -86,16 +167,24 @@ class Hand:
         self.dims = dims
         self.model = pin.Model()
         self.model.name = f"{dims.name}_{design.label}"
-        shapes = _link_shapes(dims)
+        thumb = dims.thumb
+        frames = thumb_frames(design, thumb.reading)
+        self.thumb_bones = frames.bones
+        """(3, 3) long axis of each thumb link in its link frame (+y unless oblique)."""
+        shapes = _link_shapes(dims, _bones_key(frames.bones))
         links: dict[str, Link] = {
             "palm": Link("palm", "palm", -1, 0, shapes["palm"]),
         }
         q_lo, q_hi = [], []
-        thumb = dims.thumb
+        if thumb.reading.bones_turn:  # the first reading's placements, bit for bit
+            t_mcp = np.array([0.0, thumb.lengths[0], 0])
+            t_ip = np.array([0.0, thumb.lengths[1], 0.0])
+        else:
+            t_mcp, t_ip = thumb.lengths[0] * frames.bones[0], thumb.lengths[1] * frames.bones[1]
         placements = [
-            pin.SE3(thumb_cmc_rotation(design.cmc_deg, design.cmc_tilt), thumb.cmc_palm),
-            pin.SE3(thumb_mcp_rotation(design.mcp_deg), np.array([0.0, thumb.lengths[0], 0])),
-            pin.SE3(np.eye(3), np.array([0.0, thumb.lengths[1], 0.0])),
+            pin.SE3(frames.R_palm_metacarpal, thumb.cmc_palm),
+            pin.SE3(frames.R_metacarpal_proximal, t_mcp),
+            pin.SE3(np.eye(3), t_ip),
         ]
         chains: list[tuple[str, list[pin.SE3], tuple[tuple[float, float], ...]]] = [
             ("thumb", placements, thumb.limits_deg)
@@ -168,7 +257,9 @@ class Hand:
 
     def thumb_n_main_palm(self, q: np.ndarray) -> np.ndarray:
         """(3,) the thumb distal phalanx's long axis (IP joint toward the tip), palm frame."""
-        return self.link_poses(q)[self.link_index["thumb_distal"], :3, 1]
+        R = self.link_poses(q)[self.link_index["thumb_distal"], :3, :3]
+        b = self.thumb_bones[2]
+        return R[:, 1] if b[1] == 1.0 else R @ b
 
     def fingertip_palm(self, finger: str, q: np.ndarray) -> np.ndarray:
         """(3,) fingertip point (end of the distal link), palm frame."""
@@ -176,7 +267,8 @@ class Hand:
         T = self.link_poses(q)[self.link_index[name]]
         shape = self.links[self.link_index[name]].shape
         assert isinstance(shape, CapsuleShape)
-        tip = shape.p1_link + np.array([0.0, shape.radius, 0.0])
+        ab = shape.p1_link - shape.p0_link
+        tip = shape.p1_link + shape.radius * ab / np.linalg.norm(ab)
         return T[:3, :3] @ tip + T[:3, 3]
 
     @property
@@ -186,10 +278,19 @@ class Hand:
 
     def visual_meshes(self) -> dict[str, trimesh.Trimesh]:
         """Visual mesh of every link in its own link frame (shared, do not modify)."""
-        return _visual_meshes(self.dims.path)
+        return _visual_meshes(self.dims.path, _bones_key(self.thumb_bones))
 
 
-def _link_shapes(dims: HandDims) -> dict[str, Shape]:
+def _bones_key(bones: np.ndarray) -> tuple[tuple[float, ...], ...] | None:
+    """Hashable thumb link axes (None: all along +y, the common case)."""
+    if (bones == np.array([0.0, 1.0, 0.0])).all():
+        return None
+    return tuple(tuple(float(v) for v in b) for b in bones)
+
+
+def _link_shapes(
+    dims: HandDims, thumb_bones: tuple[tuple[float, ...], ...] | None = None
+) -> dict[str, Shape]:
     p = dims.palm
     shapes: dict[str, Shape] = {
         "palm": BoxShape(
@@ -206,13 +307,19 @@ def _link_shapes(dims: HandDims) -> dict[str, Shape]:
         for k, (name, length, r) in enumerate(zip(names, lengths, radii, strict=True)):
             # the distal link's rounded cap ends at the fingertip
             end = length - r if k == 2 else length
-            shapes[name] = CapsuleShape(np.zeros(3), np.array([0.0, end, 0.0]), r)
+            if thumb_bones is not None and names is fingers[0][0]:
+                p1 = end * np.asarray(thumb_bones[k])
+            else:
+                p1 = np.array([0.0, end, 0.0])
+            shapes[name] = CapsuleShape(np.zeros(3), p1, r)
     return shapes
 
 
-@lru_cache(maxsize=4)
-def _visual_meshes(path: Path) -> dict[str, trimesh.Trimesh]:
-    shapes = _link_shapes(load_hand_dims(path))
+@lru_cache(maxsize=16)
+def _visual_meshes(
+    path: Path, thumb_bones: tuple[tuple[float, ...], ...] | None = None
+) -> dict[str, trimesh.Trimesh]:
+    shapes = _link_shapes(load_hand_dims(path), thumb_bones)
     return {name: s.visual_mesh() for name, s in shapes.items()}
 
 
