@@ -24,7 +24,8 @@ class ThumbDesign:
     mcp_deg: float = field(default=BASELINE_DEG[1], metadata={"range": MCP_RANGE_DEG})
     """Thumb MCP axis orientation m: the CMC axis turned by m about the metacarpal (°)."""
     cmc_tilt: Literal["ulnar", "radial"] = "ulnar"
-    """Which way the distal end of the CMC axis leans as c grows (METHOD §1 default: ulnar)."""
+    """'ulnar' keeps the hand file's sense of c (its ``cmc_tilt_line``; the default hand leans
+    the CMC axis radially, ``imma_right_v1`` ulnarly); 'radial' mirrors it."""
 
     def __post_init__(self) -> None:
         for f in fields(self):
