@@ -23,8 +23,12 @@ def judged():
     kit, s = HandKit(build_hand(30.0, 75.0)), SimSettings()
     out = []
     for i in range(0, len(hyps), 17):
-        g = simulate_thumb(kit, obj, simulate_base(kit, obj, hyps, i, s), s)
-        out.append((g, judge(g, obj, s, 123)))
+        b = simulate_base(kit, obj, hyps, i, s)
+        g = simulate_thumb(kit, obj, b, s)
+        # the same grasp without the thumb's contacts (palm and fingers alone): the sample
+        # then holds grasps of both verdicts whatever the hand file
+        for gg in (g, dataclasses.replace(g, contacts=b.contacts)):
+            out.append((gg, judge(gg, obj, s, 123)))
     return obj, s, out
 
 
