@@ -37,6 +37,11 @@ Z95 = 1.959963984540054
 """The normal quantile of a two-sided 95 % interval."""
 
 
+#: Seed of the order in which the live score computes an object's hypotheses: a seeded random
+#: order, so the hypotheses done at any moment are a simple random sample of the object's.
+SAMPLE_SEED = 0
+
+
 def wilson_interval(successes: float, n: int, z: float = Z95) -> tuple[float, float]:
     """The Wilson score interval of a proportion (fractions, 0..1); (0, 1) when n = 0.
 
@@ -391,6 +396,7 @@ class ScoreWorker:
                     p = ObjectProgress(
                         key, snap.n_gh[key], n, fc, c, computed=n - have,
                         elapsed_s=time.perf_counter() - t_obj,
+                        source="random sample" if have == 0 else "run order",
                     )  # fmt: skip
                     snap.progress[key] = p
                     snap.rate_per_s = p.rate_per_s or snap.rate_per_s
@@ -400,6 +406,7 @@ class ScoreWorker:
                 res = run_sweep(
                     [design], [key], settings=settings, store=self.store,
                     executor=self.executor, chunk=30, progress=progress, cancel=cancel,
+                    shuffle_seed=SAMPLE_SEED,
                 )  # fmt: skip
                 if res is None or cancel.is_set():
                     return

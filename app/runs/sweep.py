@@ -110,12 +110,15 @@ def run_sweep(
     progress: bool | Callable[[int, int], None] = True,
     cancel: threading.Event | None = None,
     gh_stride: int = 1,
+    shuffle_seed: int | None = None,
 ) -> SweepResult | None:
     """Evaluate every design on every object; resumes from and writes to ``store``.
 
     Returns None when cancelled. ``progress`` is True (terminal bar), False, or a callback
     ``(done, total)``. ``gh_stride`` > 1 previews on every k-th hypothesis of each object
     (scores are then over that subset: the published numbers need ``gh_stride=1``).
+    ``shuffle_seed``: compute the hypotheses in a seeded random order (``plan_tasks``), so a
+    run stopped early holds a random sample.
     """
     if gh_stride < 1:
         from app.errors import SettingsError
@@ -129,7 +132,9 @@ def run_sweep(
         store.put_design_meta(design_key(d), d.as_dict())
     for name in object_names:
         store.put_object_meta(object_key(name), {"key": name})
-    tasks = plan_tasks(store, designs, object_names, settings, chunk, gh_stride)
+    tasks = plan_tasks(
+        store, designs, object_names, settings, chunk, gh_stride, shuffle_seed=shuffle_seed
+    )
     done = execute_tasks(tasks, store, skey, object_key, executor, progress, cancel)
     if cancel is not None and cancel.is_set():
         return None

@@ -9,6 +9,8 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
+import numpy as np
+
 from app.model.design import ThumbDesign
 from app.model.objects import load_object
 from app.quality.judge import judge
@@ -97,11 +99,16 @@ def plan_tasks(
     chunk: int = DEFAULT_CHUNK,
     gh_stride: int = 1,
     hypothesis_set: str = "anthropomorphic",
+    shuffle_seed: int | None = None,
 ) -> list[Task]:
     """Tasks for every (design, object, GH) not yet in the store (every ``gh_stride``-th GH).
 
     ``hypothesis_set`` (one of ``HYPOTHESIS_SETS``) picks the hypotheses and the store's
     object key (``hypotheses_of``/``set_object_key``); the default is the benchmark's.
+    ``shuffle_seed``: when given, each object's hypotheses are taken in a seeded random order
+    (the same for every call), so the outcomes finished at any moment are a simple random
+    sample of the object's hypotheses: an honest running estimate. Outcomes do not depend on
+    the order.
     """
     skey = settings.key()
     dkeys = [design_key(d) for d in designs]
@@ -111,6 +118,9 @@ def plan_tasks(
         okey = set_object_key(name, hypothesis_set)
         present = [store.present_ids(dk, okey, skey) for dk in dkeys]
         subset = list(range(0, len(hyps), gh_stride))
+        if shuffle_seed is not None:
+            order = np.random.default_rng([shuffle_seed, len(subset)]).permutation(len(subset))
+            subset = [subset[k] for k in order]
         for start in range(0, len(subset), chunk):
             idx = subset[start : start + chunk]
             # group designs by which of these GHs they lack (usually: all or none)
