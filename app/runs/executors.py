@@ -9,6 +9,7 @@ import shutil
 import signal
 import tempfile
 import threading
+import time
 from collections.abc import Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -119,6 +120,11 @@ class LocalExecutor(Executor):
         """The error naming the object and hypothesis the dead worker was on."""
         from app.sim.hypothesis_sets import hypotheses_of
 
+        # the pool reports the break as soon as a worker vanishes; its exit code may be set a
+        # moment later (the process is reaped asynchronously)
+        deadline = time.monotonic() + 5.0
+        while time.monotonic() < deadline and all(p.exitcode in (0, None) for p in procs.values()):
+            time.sleep(0.02)
         dead = [(pid, p.exitcode) for pid, p in procs.items() if p.exitcode not in (0, None)]
         crashed = [d for d in dead if d[1] != -signal.SIGTERM] or dead
         where = f"object {task.object_name!r}, one of hypotheses {list(task.gh)[:5]}..."
