@@ -9,67 +9,58 @@ Figures (the published CSV holds 14 designs: CMC 0 and 30 degrees, all MCP angle
 - the baseline (CMC 0, MCP 45) rank among our 28 (1 = best) and whether it is in the
   bottom half;
 - mean absolute difference of total S_GAS over the 14 rows (percentage points).
-Only reads the two tables; nothing here feeds back into a simulation.
+Only reads the two tables (``app.reports.validate``, as ``handbench validate`` does);
+nothing here feeds back into a simulation.
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
 import json
-import math
 from pathlib import Path
 
 import numpy as np
-from scipy import stats
+
+from app.reports.validate import ScoreTable, read_score_table
+from app.reports.validate import agreement as table_agreement
 
 OBJECTS = ("small_marker", "plastic_pear", "washer", "chips_can", "coffee_can", "power_drill")
 SHORT = dict(zip(OBJECTS, ("marker", "pear", "washer", "chips", "coffee", "drill"), strict=True))
-DEFAULT_PUBLISHED = Path("/work/shared/reference/published_sgas_cmc0_cmc30.csv")
+DEFAULT_PUBLISHED = (
+    Path(__file__).resolve().parents[1] / "docs" / "reference" / "published_sgas_cmc0_cmc30.csv"
+)
 BASELINE = (0.0, 45.0)
 FRINGE = (90.0, 105.0)
 
 
-def _rows(path: Path) -> list[dict[str, str]]:
-    with path.open() as f:
-        return list(csv.DictReader(line for line in f if not line.startswith("#")))
-
-
-def _col(row: dict[str, str], name: str) -> float:
-    """Our table names columns '<x>_pct'; the published one '<x>'."""
-    return float(row[name + "_pct"] if name + "_pct" in row else row[name])
-
-
 def agreement(ours_csv: Path, published_csv: Path = DEFAULT_PUBLISHED) -> dict:
-    ours = {(float(r["cmc_deg"]), float(r["mcp_deg"])): r for r in _rows(ours_csv)}
-    pub = {(float(r["cmc_deg"]), float(r["mcp_deg"])): r for r in _rows(published_csv)}
-    keys = [k for k in pub if k in ours]
-    out: dict = {"n_ours": len(ours), "n_common": len(keys)}
-    o_tot = np.array([_col(ours[k], "total_sgas") for k in keys])
-    p_tot = np.array([_col(pub[k], "total_sgas") for k in keys])
-    out["spearman_total"] = float(stats.spearmanr(o_tot, p_tot).statistic)
-    out["kendall_total"] = float(stats.kendalltau(o_tot, p_tot).statistic)
-    per = {}
-    for ob in OBJECTS:
-        a = np.array([_col(ours[k], f"{ob}_sgas") for k in keys])
-        b = np.array([_col(pub[k], f"{ob}_sgas") for k in keys])
-        rho = stats.spearmanr(a, b).statistic if a.std() > 0 and b.std() > 0 else math.nan
-        per[ob] = float(rho)
-    out["spearman_per_object"] = per
-    out["median_object_rho"] = float(np.nanmedian(list(per.values())))
-    out["mad_total"] = float(np.mean(np.abs(o_tot - p_tot)))
-    ranked = sorted(ours, key=lambda k: -_col(ours[k], "total_sgas"))
-    best = ranked[0]
-    out["best"] = {"cmc": best[0], "mcp": best[1], "total": _col(ours[best], "total_sgas")}
-    out["best_on_fringe"] = FRINGE[0] <= best[0] + best[1] <= FRINGE[1]
-    if BASELINE in ours:
-        rank = ranked.index(BASELINE) + 1
+    """The issue-11 figures: ``handbench validate``'s agreement (``app.reports.validate``)
+    plus the fringe, bottom-half and best-per-CMC readings of the study."""
+    ours = read_score_table(ours_csv)
+    ag = table_agreement(ours, read_score_table(published_csv))
+    total = ag.get("total_sgas")
+    per = {ob: ag.get(f"{ob}_sgas").spearman for ob in OBJECTS}
+    out: dict = {
+        "n_ours": len(ours.designs),
+        "n_common": len(ag.common),
+        "spearman_total": total.spearman,
+        "kendall_total": total.kendall,
+        "spearman_per_object": per,
+        "median_object_rho": float(np.nanmedian(list(per.values()))),
+        "mad_total": total.mad,
+    }
+    assert total.best_ours is not None
+    (bc, bm), bv = total.best_ours
+    out["best"] = {"cmc": bc, "mcp": bm, "total": bv}
+    out["best_on_fringe"] = FRINGE[0] <= bc + bm <= FRINGE[1]
+    if total.baseline_rank_ours is not None:
+        rank, n = total.baseline_rank_ours
         out["baseline_rank"] = rank
-        out["baseline_total"] = _col(ours[BASELINE], "total_sgas")
-        out["baseline_bottom_half"] = rank > len(ours) / 2
+        out["baseline_total"] = ours.values["total_sgas"][BASELINE]
+        out["baseline_bottom_half"] = rank > n / 2
     by_c: dict[float, float] = {}
-    for k in ours:
-        by_c[k[0]] = max(by_c.get(k[0], -1.0), _col(ours[k], "total_sgas"))
+    for (c, _), v in ours.values["total_sgas"].items():
+        by_c[c] = max(by_c.get(c, -1.0), v)
     out["best_total_per_cmc"] = {f"{c:g}": v for c, v in sorted(by_c.items())}
     return out
 
@@ -99,10 +90,9 @@ def format_report(a: dict) -> str:
 
 def format_grids(ours_csv: Path, published_csv: Path = DEFAULT_PUBLISHED) -> str:
     """Per object and total: our S_GAS on the (CMC rows x MCP columns) grid, published below."""
-    ours = {(float(r["cmc_deg"]), float(r["mcp_deg"])): r for r in _rows(ours_csv)}
-    pub = {(float(r["cmc_deg"]), float(r["mcp_deg"])): r for r in _rows(published_csv)}
-    cs = sorted({k[0] for k in ours})
-    ms = sorted({k[1] for k in ours})
+    ours, pub = read_score_table(ours_csv), read_score_table(published_csv)
+    cs = sorted({d[0] for d in ours.designs})
+    ms = sorted({d[1] for d in ours.designs})
     out = []
     for name in (
         [f"{o}_sgas" for o in OBJECTS]
@@ -112,12 +102,19 @@ def format_grids(ours_csv: Path, published_csv: Path = DEFAULT_PUBLISHED) -> str
     ):
         out.append(f"{name:18s} " + " ".join(f"{m:5g}" for m in ms))
         for src, tag in ((ours, "ours"), (pub, "pub")):
-            for c in cs:
-                if not any((c, m) in src for m in ms):
-                    continue
-                vals = [f"{_col(src[(c, m)], name):5.1f}" if (c, m) in src else "    ." for m in ms]
-                out.append(f"  {tag:4s} c={c:<4g}       " + " ".join(vals))
+            out += _grid_rows(src, tag, name, cs, ms)
     return "\n".join(out)
+
+
+def _grid_rows(src: ScoreTable, tag: str, name: str, cs: list, ms: list) -> list[str]:
+    vals = src.values[name]
+    rows = []
+    for c in cs:
+        if not any((c, m) in vals for m in ms):
+            continue
+        cells = [f"{vals[(c, m)]:5.1f}" if (c, m) in vals else "    ." for m in ms]
+        rows.append(f"  {tag:4s} c={c:<4g}       " + " ".join(cells))
+    return rows
 
 
 def main() -> None:

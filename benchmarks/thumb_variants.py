@@ -13,6 +13,8 @@ import re
 import sys
 from pathlib import Path
 
+from app.model.hand.data import V1_READING
+
 ROOT = Path(__file__).resolve().parents[1]
 BASE = ROOT / "hand_models" / "imma_right_v1.toml"
 HUMAN = [[0, 70], [0, 50], [0, 80]]
@@ -39,12 +41,7 @@ def normal_of_raised(g_deg: float) -> list[float]:
 
 #: name -> (description, thumb keys). Missing keys keep the first reading's value.
 V1 = {
-    "rest_direction": [1, 0, 0],
-    "cmc_axis": [0, -1, 0],
-    "cmc_tilt_line": [0, 0, 1],
-    "bones_turn": True,
-    "mcp_turn_line": "metacarpal",
-    "mcp_sense": 1,
+    **V1_READING,
     "cmc": [30.0, 18.0, 0.0],
     "limits": HUMAN,
 }
