@@ -269,6 +269,14 @@ def cmd_objects(args: argparse.Namespace) -> int:
             f"{len(obj.mesh.faces)} faces, size {(b[1] - b[0]).round(1).tolist()} mm, "
             f"saved in {folder}"
         )
+        # the distance field of the saved file (what every later process loads), built now
+        # so that the first evaluation does not pay for it
+        from app.model.objects.model import object_from_file
+
+        saved = object_from_file(Path(folder) / f"{obj.spec.key}.toml", obj.spec.key)
+        built_s, where = saved.prepare_distance_field()
+        if built_s is not None:
+            print(f"distance field built in {built_s:.1f} s, cached in {where}")
         return 0
     for k in available_keys():
         o = load_object(k)

@@ -612,7 +612,8 @@ def import_object(
     frame: base centre, +z up). register: make ``load_object(key)`` find it in this
     process; save_to: folder where ``<key>.ply`` and ``<key>.toml`` are written (the CLI
     saves to :func:`user_objects_dir`, which ``load_object`` searches in every process).
-    Collision uses one fcl.BVHModel; the SDF is exact but slow (closest point + rays).
+    Collision uses one fcl.BVHModel; the signed distance is a cached distance field, exact
+    near the surface (:mod:`app.model.objects.distance_field`).
 
     Raises MeshImportError (bad file, see :func:`read_mesh`; bad key or axis) and
     UnknownObjectError (``like`` is not a known object).

@@ -72,6 +72,19 @@ class GraspObject:
         norm = np.linalg.norm(g, axis=1, keepdims=True)
         return g / np.where(norm > 1e-12, norm, 1.0)
 
+    def prepare_distance_field(self) -> tuple[float | None, str | None]:
+        """Load or build an imported mesh's distance field now (``MeshSdf``): the seconds it
+        took to build (None when it came from the disk cache or the object has none) and the
+        cache folder (None for analytic objects)."""
+        from app.model.objects.distance_field import cache_dir
+        from app.model.objects.shapes import MeshSdf
+
+        sdf = self._geometry.sdf
+        if not isinstance(sdf, MeshSdf):
+            return None, None
+        sdf.field()
+        return sdf.built_s, str(cache_dir())
+
     def collision_objects(self) -> list[Any]:
         """FCL collision objects of the pieces, posed in the object frame (built once, cached).
 
