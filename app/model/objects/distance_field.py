@@ -21,14 +21,16 @@ How it is built (``build_field``):
 - **Outside the grid** (padded by the band and two cells), the distance to the mesh's
   bounding box, again a lower bound.
 
-Queries (``DistanceField.__call__``): where the 8 nodes around a point are all in the band,
-the smallest ``|node value| + node distance`` bounds the point's distance from above, and the
-triangles of the buckets within that bound (a 2 mm grid of triangle lists) are searched for
-the exact nearest one: the answer is the exact signed distance, to rounding (tests compare it
+Queries (``DistanceField.__call__``): the smallest ``|node value| + node distance`` over the
+8 nodes around a point (a far node's value raised by its error bound ``h·√3/2``) bounds the
+point's distance from above; when that bound is within ``EXACT_WITHIN_MM`` (25 mm), the
+triangles of the buckets within it (a 2 mm grid of triangle lists) are searched for the
+exact nearest one: the answer is the exact signed distance, to rounding (tests compare it
 with trimesh at 1e-9 mm). Elsewhere the trilinear interpolation of the nodes is returned
-(far from the surface, or outside the grid). Plain interpolation would err by up to about
-h/2 next to sharp rims and thin walls (0.5 mm measured on a 3 mm annulus), half the contact
-tolerance, which is why the near field is answered exactly.
+(deeper or farther than 25 mm, or outside the grid: the distance to the mesh's box). Plain
+interpolation would err by up to about h/2 next to sharp rims and thin walls (0.5 mm
+measured on a 3 mm annulus), half the contact tolerance, which is why the near field is
+answered exactly.
 
 Cache: ``$XDG_CACHE_HOME/handbench/fields/<hash>.npz`` (``~/.cache/...``), keyed by the mesh's
 vertices and faces, the spacing, the band and ``FIELD_VERSION``; written atomically, so
@@ -55,6 +57,8 @@ FIELD_VERSION = 1
 SPACING_MM = 1.0
 #: Default exact band (mm): the contact screening looks up to tol + 1.5·δ ≈ 5.5 mm.
 BAND_MM = 6.0
+#: Queries are answered exactly (nearest triangle) up to this distance from the surface.
+EXACT_WITHIN_MM = 25.0
 #: Largest grid (nodes); larger objects get a coarser spacing (600 mm → ~3 mm).
 MAX_NODES = 12_000_000
 
@@ -80,8 +84,8 @@ class DistanceField:
     """The triangles, their pseudo-normals and a bucket grid over them (exact queries)."""
 
     def __call__(self, p: np.ndarray) -> np.ndarray:
-        """Signed distance (N,) of points (N, 3), object frame: exact (to rounding) where the
-        8 grid nodes around a point are all in the band, else the interpolated field."""
+        """Signed distance (N,) of points (N, 3), object frame: exact (to rounding) within
+        ``EXACT_WITHIN_MM`` of the surface, else the interpolated field (module docstring)."""
         p = np.ascontiguousarray(np.asarray(p, dtype=np.float64).reshape(-1, 3))
         out = np.empty(len(p))
         m = self.mesh
@@ -89,7 +93,7 @@ class DistanceField:
         _query(
             p, self.origin_mm, self.spacing_mm, self.values_mm, self.band_mm, self.lo_mm,
             self.hi_mm, m.V, m.F, m.n_face, m.n_edge, m.n_vert, m.b_origin, m.b_size,
-            m.b_shape, m.b_start, m.b_ids, stamp, out,
+            m.b_shape, m.b_start, m.b_ids, EXACT_WITHIN_MM, stamp, out,
         )  # fmt: skip
         return out
 
@@ -99,7 +103,7 @@ class DistanceField:
         out = np.empty(len(p))
         for k in range(len(p)):
             out[k] = _interp(p[k], self.origin_mm, self.spacing_mm, self.values_mm,
-                             self.lo_mm, self.hi_mm)[0]  # fmt: skip
+                             self.band_mm, self.lo_mm, self.hi_mm)[0]  # fmt: skip
         return out
 
     @property
@@ -138,10 +142,16 @@ class MeshArrays:
 
 @njit(cache=True, inline="always")
 def _interp(
-    p: np.ndarray, origin: np.ndarray, h: float, v: np.ndarray, lo: np.ndarray, hi: np.ndarray
+    p: np.ndarray,
+    origin: np.ndarray,
+    h: float,
+    v: np.ndarray,
+    band: float,
+    lo: np.ndarray,
+    hi: np.ndarray,
 ) -> tuple[float, float, bool]:
-    """(trilinear value, upper bound of |distance| from the 8 nodes, whether all 8 nodes are
-    in the band); outside the grid the distance to the mesh's box (a lower bound), inf, False."""
+    """(trilinear value, upper bound of |distance| from the 8 nodes, whether p is in the
+    grid); outside the grid the distance to the mesh's box (a lower bound), inf, False."""
     nx, ny, nz = v.shape
     fx = (p[0] - origin[0]) / h
     fy = (p[1] - origin[1]) / h
@@ -169,8 +179,10 @@ def _interp(
                 ex = (tx - di) * h
                 ey = (ty - dj) * h
                 ez = (tz - dm) * h
-                u = abs(v[i + di, j + dj, m + dm]) + math.sqrt(ex * ex + ey * ey + ez * ez)
-                upper = min(upper, u)
+                a = abs(v[i + di, j + dj, m + dm])
+                if a > band:  # a far node's value is low by at most h·√3/2
+                    a += h * 0.8660254037844387
+                upper = min(upper, a + math.sqrt(ex * ex + ey * ey + ez * ez))
     return c0 * (1 - tz) + c1 * tz, upper, True
 
 
@@ -193,15 +205,15 @@ def _query(
     b_shape: np.ndarray,
     b_start: np.ndarray,
     b_ids: np.ndarray,
+    exact_within: float,
     stamp: np.ndarray,
     out: np.ndarray,
 ) -> None:
     nbx, nby, nbz = b_shape[0], b_shape[1], b_shape[2]
     for k in range(p.shape[0]):
-        val, upper, inside_grid = _interp(p[k], origin, h, v, lo, hi)
+        val, upper, inside_grid = _interp(p[k], origin, h, v, band, lo, hi)
         out[k] = val
-        # the nodes are exact only within the band: upper bounds |d(p)| when they all are
-        if not inside_grid or upper > band:
+        if not inside_grid or upper > exact_within:
             continue
         r = upper + 1e-3  # the nodes are float32
         lo_b = np.empty(3, np.int64)
