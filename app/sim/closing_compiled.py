@@ -11,24 +11,45 @@ some poses (measured in ``tests/test_gjk.py``), so stops agree to that order.
 
 Obstacles are the object's convex pieces (types and vertices kept by the model, see
 ``app.model.objects.shapes.Piece.vertices``) plus, for the thumb, the hand's palm box and
-long-finger capsules. Objects with a piece the arrays cannot describe (an imported mesh's
-``fcl.BVHModel``, a Convex without its vertices) have no arrays, and the caller falls back
-to FCL.
+long-finger capsules. An imported mesh (FCL's ``fcl.BVHModel``) is one ``MESH`` row, whose
+distances come from its distance field and GJK on nearby triangles
+(``app.sim.mesh_distance``). Objects with a piece the arrays cannot describe (a Convex
+without its vertices, a mesh without a field) have no arrays, and the caller falls back to
+FCL.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import fcl
 import numpy as np
 from numba import njit
 
 from app.model.hand.chains import FingerChain
 from app.model.hand.geometry import BoxShape, CapsuleShape
+from app.model.objects.distance_field import MeshPack, empty_pack
 from app.sim import gjk
 from app.sim.closing_settings import EXACT_BELOW_MM, REFINE_BAND, REFINE_ITERS
+from app.sim.mesh_distance import MESH, mesh_distance
+
+#: A mesh obstacle's distance is exact when it may be below tol + this (a lower bound above).
+MESH_EXACT_MM = 2.0
+
+_EMPTY_PACK: list[MeshPack] = []
+
+
+def _pack(arrays: ObstacleArrays) -> MeshPack:
+    """The mesh pack of ``arrays``, or an empty one of the same types."""
+    if arrays.mesh is not None:
+        return arrays.mesh
+    if not _EMPTY_PACK:
+        _EMPTY_PACK.append(empty_pack())
+    return _EMPTY_PACK[0]
+
 
 #: Event codes returned by the compiled stage (``StageEvent.kind`` in that order).
 EVENT_KINDS = ("contact", "self", "limit", "max_steps")
@@ -50,6 +71,8 @@ class ObstacleArrays:
     """(P + 1,) int64: vertices of shape p are ``verts[vstart[p]:vstart[p + 1]]``."""
     verts: np.ndarray
     """(V, 3) hull vertices of the ``POINTS`` shapes, shape frames."""
+    mesh: Any = None
+    """The imported mesh's ``DistanceField.pack`` when a row is ``MESH`` (at most one)."""
 
     def __len__(self) -> int:
         return len(self.typ)
@@ -63,6 +86,7 @@ class ObstacleArrays:
             np.concatenate([self.t, other.t]),
             np.concatenate([self.vstart[:-1], other.vstart + self.vstart[-1]]),
             np.concatenate([self.verts, other.verts]),
+            self.mesh if self.mesh is not None else other.mesh,
         )
 
 
@@ -94,8 +118,19 @@ def _pieces_arrays(target: Any) -> ObstacleArrays | None:
     if pieces is None:
         return None
     rows: list[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]] = []
+    mesh = None
     for pc in pieces:
         verts = getattr(pc, "vertices", None)
+        if isinstance(pc.geometry, fcl.BVHModel):
+            # an imported mesh: its distance field, if the target has one, in the object frame
+            pack_of = getattr(target, "mesh_pack", None)
+            pack = pack_of() if callable(pack_of) else None
+            ident = np.allclose(pc.R_object_piece, np.eye(3)) and not np.any(pc.t_object_piece)
+            if pack is None or mesh is not None or not ident:
+                return None
+            mesh = pack
+            rows.append((MESH, np.zeros(3), np.eye(3), np.zeros(3), None))
+            continue
         if verts is not None:
             rows.append((gjk.POINTS, np.zeros(3), pc.R_object_piece, pc.t_object_piece, verts))
             continue
@@ -103,7 +138,8 @@ def _pieces_arrays(target: Any) -> ObstacleArrays | None:
         if d is None:  # BVHModel (imported mesh), or a Convex without its vertices
             return None
         rows.append((d[0], d[1], pc.R_object_piece, pc.t_object_piece, None))
-    return _arrays(rows)
+    arr = _arrays(rows)
+    return arr if mesh is None else dataclasses.replace(arr, mesh=mesh)
 
 
 #: id(target) -> (target, arrays): objects are long-lived (``load_object`` caches them); the
@@ -209,6 +245,7 @@ def _evaluate(
     obj_hit: np.ndarray,
     self_hit: np.ndarray,
     counters: np.ndarray,
+    mesh: MeshPack,
 ) -> float:
     """``evaluate`` of ``app.sim.closing.advance_stage``: updates ``lb`` rows, sets the hit
     masks, returns the smallest gap of a moving link; ``counters[0]`` += queries."""
@@ -244,21 +281,15 @@ def _evaluate(
             if not posed:
                 Tk = T_links[k] @ T_fcl[k]
                 posed = True
-            row[p] = gjk.shape_distance(
-                gjk.CAPSULE,
-                cap_prm[k],
-                Tk[:3, :3],
-                Tk[:3, 3],
-                otyp[p],
-                oprm[p],
-                oR[p],
-                ot[p],
-                verts,
-                0,
-                0,
-                vstart[p],
-                vstart[p + 1],
-            )
+            if otyp[p] == MESH:
+                row[p] = mesh_distance(
+                    gjk.CAPSULE, cap_prm[k], Tk[:3, :3], Tk[:3, 3], mesh, tol + MESH_EXACT_MM
+                )
+            else:
+                row[p] = gjk.shape_distance(
+                    gjk.CAPSULE, cap_prm[k], Tk[:3, :3], Tk[:3, 3], otyp[p], oprm[p], oR[p],
+                    ot[p], verts, 0, 0, vstart[p], vstart[p + 1],
+                )  # fmt: skip
             counters[0] += 1
             exact[p] = True
         g = inf
@@ -306,6 +337,7 @@ def advance_stage_kernel(
     refine_iters: int,
     refine_band: float,
     counters: np.ndarray,
+    mesh: MeshPack,
 ) -> tuple[np.ndarray, int, np.ndarray, np.ndarray]:
     """One closing stage (``app.sim.closing.advance_stage``): (q, event code, links (3,) bool,
     joints at limit (3,) bool). ``counters`` += (queries, steps, capped)."""
@@ -364,7 +396,7 @@ def advance_stage_kernel(
         counters[1] += 1
         g = _evaluate(
             q, placements, T_fcl, cap_prm, T_op, first, lb, tol,
-            otyp, oprm, oR, ot, vstart, verts, is_obj, obj_hit, self_hit, counters,
+            otyp, oprm, oR, ot, vstart, verts, is_obj, obj_hit, self_hit, counters, mesh,
         )  # fmt: skip
         if (obj_hit.any() or self_hit.any()) and have_safe:
             lo_t, lo_f, hi_t, hi_f = 0.0, safe_g - tol, safe_step, g - tol
@@ -381,7 +413,7 @@ def advance_stage_kernel(
                         lb[k, j] = safe_lb[k, j] - d
                 gm = _evaluate(
                     safe_q + v * t, placements, T_fcl, cap_prm, T_op, first, lb, tol,
-                    otyp, oprm, oR, ot, vstart, verts, is_obj, o2, s2, counters,
+                    otyp, oprm, oR, ot, vstart, verts, is_obj, o2, s2, counters, mesh,
                 )  # fmt: skip
                 if o2.any() or s2.any():
                     hi_t, hi_f = t, gm - tol
@@ -467,6 +499,7 @@ def approach_kernel(
     max_steps: int,
     exact_below: float,
     counters: np.ndarray,
+    mesh: MeshPack,
 ) -> tuple[float, int]:
     """``app.sim.closing.approach``: (s, status) with status 0 contact, 1 passed the target
     (no contact), 2 capped by ``max_steps``."""
@@ -487,10 +520,14 @@ def approach_kernel(
                     if not posed:
                         Tb = T @ T_palm_bodies[b]
                         posed = True
-                    lb[b, p] = gjk.shape_distance(
-                        btyp[b], bprm[b], Tb[:3, :3], Tb[:3, 3],
-                        otyp[p], oprm[p], oR[p], ot[p], verts, 0, 0, vstart[p], vstart[p + 1],
-                    )  # fmt: skip
+                    if otyp[p] == MESH:
+                        lb[b, p] = mesh_distance(btyp[b], bprm[b], Tb[:3, :3], Tb[:3, 3], mesh,
+                                                 exact_below)  # fmt: skip
+                    else:
+                        lb[b, p] = gjk.shape_distance(
+                            btyp[b], bprm[b], Tb[:3, :3], Tb[:3, 3],
+                            otyp[p], oprm[p], oR[p], ot[p], verts, 0, 0, vstart[p], vstart[p + 1],
+                        )  # fmt: skip
                     counters[0] += 1
         gap = np.inf
         for b in range(B):
@@ -570,6 +607,7 @@ def advance_stage_compiled(
         np.asarray(v, float),
         arrays.typ, arrays.prm, arrays.R, arrays.t, arrays.vstart, arrays.verts,
         is_obj, m, sph, float(tol), int(max_steps), REFINE_ITERS, REFINE_BAND, counters,
+        _pack(arrays),
     )  # fmt: skip
     return (
         qn,
@@ -599,5 +637,5 @@ def approach_compiled(
         np.ascontiguousarray(R_object_palm, float), np.asarray(ray_object, float),
         np.asarray(target_object, float), offset,
         pieces.typ, pieces.prm, pieces.R, pieces.t, pieces.vstart, pieces.verts,
-        float(start_mm), float(tol), int(max_steps), EXACT_BELOW_MM, counters,
+        float(start_mm), float(tol), int(max_steps), EXACT_BELOW_MM, counters, _pack(pieces),
     )  # fmt: skip

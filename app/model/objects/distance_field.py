@@ -18,19 +18,19 @@ How it is built (``build_field``):
   that errs by at most ``h·√3/2``; between nodes the interpolation adds up to about h/4
   (the tests bound the far error by 1.25 h). Only the contact screening reads these values,
   with a margin of several mm.
-- **Outside the grid** (padded by the band and two cells), the distance to the mesh's
-  bounding box, again a lower bound.
+- **Outside the grid** (padded by ``EXACT_WITHIN_MM`` and two cells, so every point within
+  8 mm of the surface is inside it), the distance to the mesh's bounding box, a lower bound.
 
 Queries (``DistanceField.__call__``): the smallest ``|node value| + node distance`` over the
 8 nodes around a point (a far node's value raised by its error bound ``h·√3/2``) bounds the
-point's distance from above; when that bound is within ``EXACT_WITHIN_MM`` (25 mm), the
-triangles of the buckets within it (a 2 mm grid of triangle lists) are searched for the
-exact nearest one: the answer is the exact signed distance, to rounding (tests compare it
-with trimesh at 1e-9 mm). Elsewhere the trilinear interpolation of the nodes is returned
-(deeper or farther than 25 mm, or outside the grid: the distance to the mesh's box). Plain
-interpolation would err by up to about h/2 next to sharp rims and thin walls (0.5 mm
-measured on a 3 mm annulus), half the contact tolerance, which is why the near field is
-answered exactly.
+point's distance from above; when that bound is within ``EXACT_WITHIN_MM`` (8 mm: beyond the
+contact screening), the triangles of the buckets within it (a 2 mm grid of triangle lists)
+are searched for the exact nearest one: the answer is the exact signed distance, to rounding
+(tests compare it with trimesh at 1e-9 mm). Elsewhere the trilinear interpolation of the
+nodes is returned (deeper or farther than 8 mm, or outside the grid: the distance to the
+mesh's box). Plain interpolation would err by up to about h/2 next to sharp rims and thin
+walls (0.5 mm measured on a 3 mm annulus), half the contact tolerance, which is why the near
+field is answered exactly.
 
 Cache: ``$XDG_CACHE_HOME/handbench/fields/<hash>.npz`` (``~/.cache/...``), keyed by the mesh's
 vertices and faces, the spacing, the band and ``FIELD_VERSION``; written atomically, so
@@ -44,23 +44,47 @@ import hashlib
 import math
 import os
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import trimesh
 from numba import njit
 
+#: The arrays of ``DistanceField.pack`` (a tuple, so that compiled code takes it whole).
+MeshPack = tuple[Any, ...]
+
 #: Bump when the field's construction changes (old cached files are then ignored).
-FIELD_VERSION = 1
+FIELD_VERSION = 2
 #: Default grid spacing (mm): the contact tolerance is 1 mm.
 SPACING_MM = 1.0
 #: Default exact band (mm): the contact screening looks up to tol + 1.5·δ ≈ 5.5 mm.
 BAND_MM = 6.0
 #: Queries are answered exactly (nearest triangle) up to this distance from the surface.
-EXACT_WITHIN_MM = 25.0
+EXACT_WITHIN_MM = 8.0
 #: Largest grid (nodes); larger objects get a coarser spacing (600 mm → ~3 mm).
 MAX_NODES = 12_000_000
+
+
+def _rw(a: np.ndarray) -> np.ndarray:
+    """``a`` as a writable C-contiguous array (numba compiles one version per layout and
+    read-only flag; every pack uses the same)."""
+    if a.flags.writeable and a.flags.c_contiguous:
+        return a
+    return np.array(a, order="C")
+
+
+def empty_pack() -> MeshPack:
+    """A pack of the right types and no triangles (compiled kernels take one always)."""
+    z3 = np.zeros(3)
+    return (
+        z3.copy(), 1.0, np.zeros((2, 2, 2), np.float32), 0.0, z3.copy(), z3.copy(),
+        np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros((0, 3)), np.zeros((0, 3, 3)),
+        np.zeros((0, 3)), z3.copy(), 1.0, np.ones(3, np.int64), np.zeros(2, np.int64),
+        np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros(0), np.zeros(0, np.int64),
+        np.zeros(1, np.int64),
+    )  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -82,20 +106,30 @@ class DistanceField:
     """(3,) upper corner of the mesh's bounding box."""
     mesh: MeshArrays
     """The triangles, their pseudo-normals and a bucket grid over them (exact queries)."""
+    _pack_cache: list[MeshPack] = field(default_factory=list, repr=False, compare=False)
 
     def __call__(self, p: np.ndarray) -> np.ndarray:
         """Signed distance (N,) of points (N, 3), object frame: exact (to rounding) within
         ``EXACT_WITHIN_MM`` of the surface, else the interpolated field (module docstring)."""
         p = np.ascontiguousarray(np.asarray(p, dtype=np.float64).reshape(-1, 3))
         out = np.empty(len(p))
-        m = self.mesh
-        stamp = np.full(len(m.F), -1, dtype=np.int64)
-        _query(
-            p, self.origin_mm, self.spacing_mm, self.values_mm, self.band_mm, self.lo_mm,
-            self.hi_mm, m.V, m.F, m.n_face, m.n_edge, m.n_vert, m.b_origin, m.b_size,
-            m.b_shape, m.b_start, m.b_ids, EXACT_WITHIN_MM, stamp, out,
-        )  # fmt: skip
+        _query(self.pack(), p, out)
         return out
+
+    def pack(self) -> MeshPack:
+        """Everything the compiled queries read, as one tuple (``point_sdf``; the closing
+        engine's mesh distance). Holds this process's scratch arrays (not thread-safe)."""
+        pk = self._pack_cache
+        if not pk:
+            m = self.mesh
+            pk.append((
+                _rw(self.origin_mm), float(self.spacing_mm), _rw(self.values_mm),
+                float(self.band_mm), _rw(self.lo_mm), _rw(self.hi_mm), _rw(m.V), _rw(m.F),
+                _rw(m.n_face), _rw(m.n_edge), _rw(m.n_vert), _rw(m.b_origin), float(m.b_size),
+                _rw(m.b_shape), _rw(m.b_start), _rw(m.b_ids), _rw(m.tri_c), _rw(m.tri_r),
+                np.zeros(len(m.F), np.int64), np.zeros(1, np.int64),
+            ))  # fmt: skip
+        return pk[0]
 
     def interpolated(self, p: np.ndarray) -> np.ndarray:
         """The grid's trilinear interpolation alone (N,), for tests and pictures."""
@@ -110,7 +144,7 @@ class DistanceField:
     def nbytes(self) -> int:
         """Memory of the samples and the mesh arrays."""
         m = self.mesh
-        arrays = (m.V, m.F, m.n_face, m.n_edge, m.n_vert, m.b_start, m.b_ids)
+        arrays = (m.V, m.F, m.n_face, m.n_edge, m.n_vert, m.b_start, m.b_ids, m.tri_c, m.tri_r)
         return int(self.values_mm.nbytes + sum(a.nbytes for a in arrays))
 
 
@@ -138,6 +172,10 @@ class MeshArrays:
     """(B + 1,) int64 CSR offsets of each bucket's triangles in ``b_ids``."""
     b_ids: np.ndarray
     """int64 triangle ids, bucket by bucket (a triangle is in every bucket its box meets)."""
+    tri_c: np.ndarray
+    """(F, 3) centre of each triangle's bounding sphere (its vertices' mean)."""
+    tri_r: np.ndarray
+    """(F,) radius of that sphere."""
 
 
 @njit(cache=True, inline="always")
@@ -187,58 +225,74 @@ def _interp(
 
 
 @njit(cache=True)
-def _query(
-    p: np.ndarray,
-    origin: np.ndarray,
-    h: float,
-    v: np.ndarray,
-    band: float,
-    lo: np.ndarray,
-    hi: np.ndarray,
-    V: np.ndarray,
-    F: np.ndarray,
-    n_face: np.ndarray,
-    n_edge: np.ndarray,
-    n_vert: np.ndarray,
-    b_origin: np.ndarray,
-    b_size: float,
-    b_shape: np.ndarray,
-    b_start: np.ndarray,
-    b_ids: np.ndarray,
-    exact_within: float,
-    stamp: np.ndarray,
-    out: np.ndarray,
-) -> None:
-    nbx, nby, nbz = b_shape[0], b_shape[1], b_shape[2]
-    for k in range(p.shape[0]):
-        val, upper, inside_grid = _interp(p[k], origin, h, v, band, lo, hi)
-        out[k] = val
-        if not inside_grid or upper > exact_within:
-            continue
-        r = upper + 1e-3  # the nodes are float32
-        lo_b = np.empty(3, np.int64)
-        hi_b = np.empty(3, np.int64)
-        for a in range(3):
-            lo_b[a] = max(int(math.floor((p[k, a] - r - b_origin[a]) / b_size)), 0)
-            hi_b[a] = min(int(math.floor((p[k, a] + r - b_origin[a]) / b_size)), b_shape[a] - 1)
-        best = np.inf
-        s_best = 0.0
-        px, py, pz = p[k, 0], p[k, 1], p[k, 2]
-        for bi in range(lo_b[0], hi_b[0] + 1):
-            for bj in range(lo_b[1], hi_b[1] + 1):
-                for bk in range(lo_b[2], hi_b[2] + 1):
+def point_sdf(pk: MeshPack, px: float, py: float, pz: float) -> float:
+    """Signed distance of one point (``DistanceField.__call__``), for compiled callers."""
+    return point_sdf_kind(pk, px, py, pz)[0]
+
+
+#: ``point_sdf_kind`` kinds: the exact distance; the grid's interpolation (within ~1.25 h);
+#: outside the grid, the distance to the mesh's box (a lower bound).
+EXACT, INTERPOLATED, OUTSIDE = 0, 1, 2
+
+
+@njit(cache=True)
+def point_sdf_kind(pk: MeshPack, px: float, py: float, pz: float) -> tuple[float, int]:
+    """(signed distance, how it was obtained: ``EXACT``, ``INTERPOLATED`` or ``OUTSIDE``)."""
+    (origin, h, v, band, lo, hi, V, F, n_face, n_edge, n_vert, b_origin, b_size, b_shape,
+     b_start, b_ids, _tc, _tr, stamp, ctr) = pk  # fmt: skip
+    p = np.empty(3)
+    p[0], p[1], p[2] = px, py, pz
+    val, upper, inside_grid = _interp(p, origin, h, v, band, lo, hi)
+    if not inside_grid:
+        return val, OUTSIDE
+    if upper > EXACT_WITHIN_MM:
+        return val, INTERPOLATED
+    r = upper + 1e-3  # the nodes are float32
+    nby, nbz = b_shape[1], b_shape[2]
+    lo_b = np.empty(3, np.int64)
+    hi_b = np.empty(3, np.int64)
+    ctr_b = np.empty(3, np.int64)
+    for a in range(3):
+        lo_b[a] = max(int(math.floor((p[a] - r - b_origin[a]) / b_size)), 0)
+        hi_b[a] = min(int(math.floor((p[a] + r - b_origin[a]) / b_size)), b_shape[a] - 1)
+        ctr_b[a] = int(math.floor((p[a] - b_origin[a]) / b_size))
+    s_max = 0
+    for a in range(3):
+        s_max = max(s_max, ctr_b[a] - lo_b[a], hi_b[a] - ctr_b[a])
+    ctr[0] += 1
+    qid = ctr[0]
+    best = r * r
+    found = False
+    s_best = 0.0
+    # shells of buckets around p's, nearest first; shell s is at least (s - 1)·b_size away
+    for sh in range(s_max + 1):
+        if sh >= 2 and (sh - 1) * b_size > math.sqrt(best):
+            break
+        for bi in range(max(lo_b[0], ctr_b[0] - sh), min(hi_b[0], ctr_b[0] + sh) + 1):
+            for bj in range(max(lo_b[1], ctr_b[1] - sh), min(hi_b[1], ctr_b[1] + sh) + 1):
+                for bk in range(max(lo_b[2], ctr_b[2] - sh), min(hi_b[2], ctr_b[2] + sh) + 1):
+                    cheb = max(abs(bi - ctr_b[0]), abs(bj - ctr_b[1]), abs(bk - ctr_b[2]))
+                    if cheb != sh:
+                        continue
                     b = (bi * nby + bj) * nbz + bk
                     for e in range(b_start[b], b_start[b + 1]):
                         f = b_ids[e]
-                        if stamp[f] == k:
+                        if stamp[f] == qid:
                             continue
-                        stamp[f] = k
-                        cx, cy, cz, feat = _closest_on_triangle(px, py, pz, V[F[f, 0]], V[F[f, 1]],
-                                                                V[F[f, 2]])  # fmt: skip
+                        stamp[f] = qid
+                        ex = px - _tc[f, 0]
+                        ey = py - _tc[f, 1]
+                        ez = pz - _tc[f, 2]
+                        lb = math.sqrt(ex * ex + ey * ey + ez * ez) - _tr[f]
+                        if lb > 0 and lb * lb > best:
+                            continue
+                        cx, cy, cz, feat = _closest_on_triangle(px, py, pz, V[F[f, 0]],
+                                                                V[F[f, 1]], V[F[f, 2]])  # fmt: skip
                         dx, dy, dz = px - cx, py - cy, pz - cz
                         d2 = dx * dx + dy * dy + dz * dz
-                        if d2 < best:
+                        if d2 < best or (not found and d2 <= best):
                             best = d2
+                            found = True
                             if feat == 0:
                                 n = n_face[f]
                             elif feat <= 3:
@@ -246,10 +300,16 @@ def _query(
                             else:
                                 n = n_edge[f, feat - 4]
                             s_best = dx * n[0] + dy * n[1] + dz * n[2]
-        if best <= r * r:
-            d = math.sqrt(best)
-            out[k] = d if s_best > 0 else (-d if s_best < 0 else 0.0)
-        _ = nbx
+    if not found:  # cannot happen: the bound holds a triangle
+        return val, INTERPOLATED
+    d = math.sqrt(best)
+    return (d if s_best > 0 else (-d if s_best < 0 else 0.0)), EXACT
+
+
+@njit(cache=True)
+def _query(pk: MeshPack, p: np.ndarray, out: np.ndarray) -> None:
+    for k in range(p.shape[0]):
+        out[k] = point_sdf(pk, p[k, 0], p[k, 1], p[k, 2])
 
 
 @njit(cache=True)
@@ -297,8 +357,12 @@ def mesh_arrays(mesh: trimesh.Trimesh, bucket_mm: float = BUCKET_MM) -> MeshArra
     b_ids = np.empty(int(b_start[-1]), np.int64)
     count[:] = 0
     _bucket_kernel(V, F, b_origin, bucket_mm, b_shape, True, count, b_start, b_ids)
+    tri = V[F]  # (F, 3, 3)
+    tri_c = np.ascontiguousarray(tri.mean(axis=1))
+    tri_r = np.sqrt(((tri - tri_c[:, None, :]) ** 2).sum(-1)).max(axis=1)
     return MeshArrays(V, F, n_face, np.ascontiguousarray(n_edge), np.ascontiguousarray(n_vert),
-                      b_origin, float(bucket_mm), b_shape, b_start, b_ids)  # fmt: skip
+                      b_origin, float(bucket_mm), b_shape, b_start, b_ids, tri_c,
+                      np.ascontiguousarray(tri_r))  # fmt: skip
 
 
 @njit(cache=True, inline="always")
@@ -418,7 +482,8 @@ def _pseudo_normals(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
 def spacing_for(mesh: trimesh.Trimesh, spacing_mm: float = SPACING_MM, band_mm: float = BAND_MM
                 ) -> float:  # fmt: skip
     """The grid spacing: ``spacing_mm``, or coarser so that the grid stays under MAX_NODES."""
-    ext = np.asarray(mesh.extents, dtype=float) + 2 * (band_mm + 2 * spacing_mm)
+    pad = max(band_mm, EXACT_WITHIN_MM) + 2 * spacing_mm
+    ext = np.asarray(mesh.extents, dtype=float) + 2 * pad
     h = spacing_mm
     while float(np.prod(np.ceil(ext / h) + 1)) > MAX_NODES:
         h *= 1.25
@@ -436,7 +501,7 @@ def build_field(
     band = max(band_mm, 2 * h)
     lo = np.asarray(mesh.bounds[0], dtype=float)
     hi = np.asarray(mesh.bounds[1], dtype=float)
-    pad = band + 2 * h
+    pad = max(band, EXACT_WITHIN_MM) + 2 * h  # every point within 8 mm is in the grid
     origin = lo - pad
     shape = tuple(int(x) for x in np.ceil((hi + pad - origin) / h) + 1)
     m = mesh_arrays(mesh)

@@ -85,6 +85,14 @@ class GraspObject:
         sdf.field()
         return sdf.built_s, str(cache_dir())
 
+    def mesh_pack(self) -> Any:
+        """An imported mesh's distance field as compiled-code arrays
+        (``DistanceField.pack``), or None for the analytic built-in objects."""
+        from app.model.objects.shapes import MeshSdf
+
+        sdf = self._geometry.sdf
+        return sdf.field().pack() if isinstance(sdf, MeshSdf) else None
+
     def collision_objects(self) -> list[Any]:
         """FCL collision objects of the pieces, posed in the object frame (built once, cached).
 
