@@ -277,6 +277,8 @@ def cmd_objects(args: argparse.Namespace) -> int:
         built_s, where = saved.prepare_distance_field()
         if built_s is not None:
             print(f"distance field built in {built_s:.1f} s, cached in {where}")
+        elif where is not None:
+            print(f"distance field found in the cache ({where})")
         return 0
     for k in available_keys():
         o = load_object(k)

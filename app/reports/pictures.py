@@ -30,6 +30,7 @@ from app.reports.scene import (
     CLEARANCE_SPACING_MM,
     CONTACT_TOL_MM,
     MIN_STEP_MM,
+    OBJECT_VIEWS,
     RenderInfo,
     draw_scene,
     new_axes,
@@ -176,6 +177,14 @@ def render_object(
         if hand is not None:
             d = float(min(obj.spec.setup.standoffs_mm)) if standoff_mm is None else standoff_mm
             title += f": hand c = {cmc_deg:g}°, m = {mcp_deg:g}° at roll 0, axis ray, δ = {d:g} mm"
+    if view is None and T is not None and key not in OBJECT_VIEWS:
+        # an imported object: the camera of the object it was imported like (its frame was
+        # turned to match, --up/--rotate), else one on the hand's radial (thumb) side, a
+        # little distal and dorsal, where the grip is visible whatever the mesh
+        from app.reports.grasp_view import grasp_view_angles
+
+        like = str(obj.spec.shape.get("like", ""))
+        view = OBJECT_VIEWS.get(like) or grasp_view_angles(T)
     info = render_scene(
         path,
         hand=hand,

@@ -642,7 +642,12 @@ def import_object(
     spec = spec_like(mesh, ref, k, f"imported from {p}")
     spec = replace(
         spec,
-        shape={**spec.shape, "imported_from": str(p.resolve()), "units": units or "guessed"},
+        shape={
+            **spec.shape,
+            "imported_from": str(p.resolve()),
+            "units": units or "guessed",
+            "like": ref.spec.key,
+        },
     )
     obj = GraspObject(spec, from_mesh(mesh))
     if save_to is not None:
