@@ -50,3 +50,14 @@ def test_worker_crash_is_named_and_finished_tasks_stay(tmp_path: Path) -> None:
         assert "SIGSEGV" in msg and "CMC 0° MCP 45°" in msg
         have = store.present_ids(design_key(d), object_key("washer"), s.key())
         assert cached_hypotheses("washer").ids[0] in have and gh_id not in have
+
+
+def test_one_local_worker_is_a_process_too() -> None:
+    """``--workers 1`` on the local executor still runs tasks in a child process (the
+    containment above), not in the caller; only ``--executor inline`` runs in-process."""
+    from app.runs.executors import InlineExecutor
+    from app.runs.sweep import make_executor
+
+    ex = make_executor("local", 1)
+    assert isinstance(ex, LocalExecutor) and not isinstance(ex, InlineExecutor)
+    assert isinstance(make_executor("inline", 1), InlineExecutor)

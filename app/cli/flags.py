@@ -239,7 +239,8 @@ def add_run_flags(s: argparse.ArgumentParser, workers_help: str) -> None:
         "--executor",
         choices=("local", "inline", "ray"),
         default="local",
-        help="local process pool (default), inline, or a Ray cluster",
+        help="local process pool (default; a crashing worker fails only its task), inline "
+        "(this process: no crash containment, for debugging and profiling), or a Ray cluster",
     )
     s.add_argument("--address", help="Ray cluster address (with --executor ray)")
     s.add_argument("--store", help="results database (default ~/.cache/handbench/results.sqlite)")

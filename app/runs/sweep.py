@@ -29,9 +29,11 @@ from app.sim.hypothesis_sets import cached_hypotheses
 
 
 def make_executor(name: str, workers: int | None = None, address: str | None = None) -> Executor:
-    """'local' (process pool), 'inline' (this process) or 'ray'."""
+    """'local' (process pool; one worker process too, so that a crash in native code fails
+    its task with a named error instead of killing the caller), 'inline' (this process: no
+    containment; for debugging and profiling) or 'ray'."""
     if name == "local":
-        return InlineExecutor() if workers == 1 else LocalExecutor(workers)
+        return LocalExecutor(workers)
     if name == "inline":
         return InlineExecutor()
     if name == "ray":
