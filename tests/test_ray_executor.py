@@ -14,7 +14,7 @@ import pytest
 ray = pytest.importorskip("ray", reason="Ray is not installed: pip install 'handbench[ray]'")
 pytestmark = pytest.mark.ray
 
-from app.errors import HandbenchError, SettingsError  # noqa: E402
+from app.errors import HandbenchError, SettingsError, WorkerCrashError  # noqa: E402
 from app.model.design import ThumbDesign  # noqa: E402
 from app.quality.outcome import GraspOutcome  # noqa: E402
 from app.quality.settings import SimSettings  # noqa: E402
@@ -62,6 +62,29 @@ def test_same_outcomes_as_inline(executor: RayExecutor) -> None:
         assert (g.is_fc, g.is_correct) == (w.is_fc, w.is_correct), k
         assert (g.q_final_rad == w.q_final_rad).all(), k
     assert any(o.is_fc for o in want.values())  # the comparison is not vacuous
+
+
+def test_dead_worker_is_a_named_error(executor: RayExecutor) -> None:
+    """A Ray worker that dies (here: a segfault in every try) fails with WorkerCrashError
+    naming the object and the task's hypotheses, not a raw Ray exception."""
+
+    def segfault(task: Task) -> list:  # defined here, so Ray ships it by value
+        import os
+        import signal
+
+        os.kill(os.getpid(), signal.SIGSEGV)
+        return []
+
+    executor._connect()
+    saved = executor._remote
+    executor._remote = ray.remote(max_retries=0)(segfault)
+    try:
+        with pytest.raises(WorkerCrashError, match=r"object 'washer', one of hypotheses"):
+            list(executor.run(_tasks(1, 2), None))
+    finally:
+        executor._remote = saved
+    # the executor still works afterwards
+    assert len(list(executor.run(_tasks(1, 1), None))) == 1
 
 
 def test_cancel_stops_early(executor: RayExecutor) -> None:

@@ -41,7 +41,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from app.errors import HandbenchError, SettingsError
+from app.errors import HandbenchError, SettingsError, WorkerCrashError
 from app.model.hand.data import data_root
 from app.model.objects.spec import user_dir
 from app.quality.outcome import GraspOutcome
@@ -203,18 +203,28 @@ class RayExecutor(Executor):
                     return
                 for ref in done:
                     task = pending.pop(ref)
-                    yield task, self._result(ref)
+                    yield task, self._result(ref, task)
         finally:
             # cancelled, failed, or the consumer stopped early: drop what is still queued
             for ref in pending:
                 ray.cancel(ref)
 
-    def _result(self, ref: Any) -> Results:
+    def _result(self, ref: Any, task: Task) -> Results:
         ray = self._ray
         try:
             return ray.get(ref)
         except ray.exceptions.RayTaskError:
             raise  # an exception inside run_task: re-raised with the worker's traceback
+        except ray.exceptions.WorkerCrashedError as e:
+            # Ray retried the task and its worker died each time (segfault, out of memory)
+            designs = ", ".join(f"CMC {d.cmc_deg:g}° MCP {d.mcp_deg:g}°" for d in task.designs[:3])
+            gh = list(task.gh)
+            raise WorkerCrashError(
+                f"a Ray worker died while simulating object {task.object_name!r}, one of "
+                f"hypotheses {gh[:5]}{'...' if len(gh) > 5 else ''} (indices), for {designs}; "
+                "results finished before are kept in the store. If the object is an imported "
+                "mesh, re-import it (objects import) or report the mesh"
+            ) from e
         except ray.exceptions.RayError as e:
             raise HandbenchError(
                 f"a Ray task failed ({type(e).__name__}: {e}); finished results are in the "
