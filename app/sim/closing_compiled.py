@@ -522,7 +522,7 @@ def approach_kernel(
                         posed = True
                     if otyp[p] == MESH:
                         lb[b, p] = mesh_distance(btyp[b], bprm[b], Tb[:3, :3], Tb[:3, 3], mesh,
-                                                 exact_below)  # fmt: skip
+                                                 tol + MESH_EXACT_MM)  # fmt: skip
                     else:
                         lb[b, p] = gjk.shape_distance(
                             btyp[b], bprm[b], Tb[:3, :3], Tb[:3, 3],

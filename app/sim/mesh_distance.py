@@ -5,19 +5,19 @@ dozens of such queries per hypothesis. Here the mesh's distance field
 (``app.model.objects.distance_field``) does the screening, and GJK (``app.sim.gjk``) the
 exact part:
 
-1. **Lower bound.** The link lies within ``reach`` of its centre c, so its distance to the
-   surface is at least ``sdf(c) - reach`` (less the field's error where sdf(c) is
-   interpolated, ~1.25 h; outside the grid the distance to the mesh's box). When that
-   exceeds ``exact_above`` the bound is returned as it is: the closing only needs exact
-   values near a stop (its conservative advancement takes lower bounds), and the callers
-   pass a threshold above the stop tolerance.
-2. **Upper bound.** Points of the link (the capsule's centre and axis points less its
-   radius, the box's centre and corners) whose distance is exact bound the distance from
-   above: ``U = min sdf(x) - margin``; the centre's interpolated value plus its error, or the
-   farthest corner of the mesh's box, when none is exact.
-3. **Exact.** The triangles in the buckets within ``U`` of the link's core, each screened by
-   its bounding sphere against the best distance so far, go to GJK (triangle = a 3-vertex
-   convex shape): the minimum is the exact link-to-surface distance (to GJK's ~1e-9 mm).
+1. **Bounds from the field.** The 8 grid nodes around a point bound its distance to the
+   surface from both sides (``abs_bounds``: ``|node| ∓ node distance``). Taken at the
+   capsule's axis points every 2 mm (less half a step and the radius) or at the box's centre
+   (less its reach), they bound the link's distance. When the lower bound exceeds
+   ``exact_above`` it is returned as it is: the closing only needs exact values near a stop
+   (its conservative advancement takes lower bounds), and the callers pass a threshold above
+   the stop tolerance.
+2. **Candidates.** The upper bound U limits the search to the buckets within U of the link's
+   core, screened in blocks of 4³ buckets, then bucket by bucket.
+3. **Exact.** Each candidate triangle, screened by its bounding sphere against the best
+   distance so far, is measured exactly: a capsule by the closed-form segment-triangle
+   distance less its radius, a box by GJK (triangle = a 3-vertex convex shape). The minimum
+   is the exact link-to-surface distance.
 
 The surface is what FCL's BVH sees too: a link wholly inside the object is not "in
 contact"; the closing never gets there from outside without crossing the surface.
@@ -30,7 +30,7 @@ import math
 import numpy as np
 from numba import njit
 
-from app.model.objects.distance_field import EXACT, INTERPOLATED, MeshPack, point_sdf_kind
+from app.model.objects.distance_field import MeshPack, abs_bounds, closest_on_triangle
 from app.sim import gjk
 
 #: Obstacle type code of a mesh in ``ObstacleArrays.typ`` (after gjk's shape types).
@@ -55,6 +55,75 @@ def _point_core_distance(typ: int, prm: np.ndarray, R: np.ndarray, t: np.ndarray
     return math.sqrt(s)
 
 
+@njit(cache=True, inline="always")
+def _seg_seg2(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> float:
+    """Squared distance between segments p1q1 and p2q2 (Ericson, Real-Time Collision
+    Detection §5.1.9)."""
+    d1 = q1 - p1
+    d2 = q2 - p2
+    r = p1 - p2
+    a = d1 @ d1
+    e = d2 @ d2
+    f = d2 @ r
+    eps = 1e-18
+    if a <= eps and e <= eps:
+        return r @ r
+    if a <= eps:
+        s = 0.0
+        t = min(max(f / e, 0.0), 1.0)
+    else:
+        c = d1 @ r
+        if e <= eps:
+            t = 0.0
+            s = min(max(-c / a, 0.0), 1.0)
+        else:
+            b = d1 @ d2
+            den = a * e - b * b
+            s = min(max((b * f - c * e) / den, 0.0), 1.0) if den > eps else 0.0
+            t = (b * s + f) / e
+            if t < 0.0:
+                t = 0.0
+                s = min(max(-c / a, 0.0), 1.0)
+            elif t > 1.0:
+                t = 1.0
+                s = min(max((b - c) / a, 0.0), 1.0)
+    w = p1 + d1 * s - (p2 + d2 * t)
+    return w @ w
+
+
+@njit(cache=True)
+def segment_triangle_distance(
+    s0: np.ndarray, s1: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray
+) -> float:
+    """Exact distance between segment s0s1 and triangle abc (0 when they meet): the segment
+    crossing the triangle, else the least of its ends against the triangle and the segment
+    against the triangle's three edges."""
+    n = np.cross(b - a, c - a)
+    e0 = n @ (s0 - a)
+    e1 = n @ (s1 - a)
+    if (e0 <= 0.0 <= e1 or e1 <= 0.0 <= e0) and e0 != e1:
+        x = s0 + (s1 - s0) * (e0 / (e0 - e1))
+        # inside the triangle: the three edge tests agree in sign with n
+        if (
+            np.cross(b - a, x - a) @ n >= 0.0
+            and np.cross(c - b, x - b) @ n >= 0.0
+            and np.cross(a - c, x - c) @ n >= 0.0
+        ):
+            return 0.0
+    best = np.inf
+    for q in (s0, s1):
+        cx, cy, cz, _ = closest_on_triangle(q[0], q[1], q[2], a, b, c)
+        d2 = (q[0] - cx) ** 2 + (q[1] - cy) ** 2 + (q[2] - cz) ** 2
+        best = min(best, d2)
+    best = min(best, _seg_seg2(s0, s1, a, b))
+    best = min(best, _seg_seg2(s0, s1, b, c))
+    best = min(best, _seg_seg2(s0, s1, c, a))
+    return math.sqrt(best)
+
+
+#: Spacing (mm) of the capsule axis points whose field bounds screen a query.
+AXIS_STEP_MM = 2.0
+
 #: Buckets per block edge (blocks are screened before their buckets).
 BLOCK = 4
 
@@ -69,6 +138,11 @@ def _bucket_triangles(
     eye = np.eye(3)
     zero = np.zeros(3)
     tri_prm = np.zeros(3)
+    s0 = np.empty(3)
+    s1 = np.empty(3)
+    for i in range(3):
+        s0[i] = t[i] - R[i, 2] * prm[1]
+        s1[i] = t[i] + R[i, 2] * prm[1]
     for e in range(b_start[b], b_start[b + 1]):
         f = b_ids[e]
         if stamp[f] == qid:
@@ -76,11 +150,14 @@ def _bucket_triangles(
         stamp[f] = qid
         if _point_core_distance(typ, prm, R, t, tri_c[f]) - tri_r[f] - margin > best:
             continue
-        for i in range(3):
-            for j in range(3):
-                tverts[i, j] = V[F[f, i], j]
-        d = gjk.shape_distance(typ, prm, R, t, gjk.POINTS, tri_prm, eye, zero, tverts,
-                               0, 0, 0, 3)  # fmt: skip
+        if typ == gjk.CAPSULE:  # closed form: segment against triangle, less the radius
+            d = segment_triangle_distance(s0, s1, V[F[f, 0]], V[F[f, 1]], V[F[f, 2]]) - margin
+        else:
+            for i in range(3):
+                for j in range(3):
+                    tverts[i, j] = V[F[f, i], j]
+            d = gjk.shape_distance(typ, prm, R, t, gjk.POINTS, tri_prm, eye, zero, tverts,
+                                   0, 0, 0, 3)  # fmt: skip
         if d < best:
             best = d
     return best
@@ -100,46 +177,27 @@ def mesh_distance(
     else:
         margin = 0.0
         reach = math.sqrt(prm[0] * prm[0] + prm[1] * prm[1] + prm[2] * prm[2])
-    d_c, kind_c = point_sdf_kind(pk, t[0], t[1], t[2])
-    slack = 1.5 * h  # interpolated (far) values err by at most ~1.25 h
-    # distances to the surface (as FCL's BVH measures them): |sdf|, inside or out
-    a_c = abs(d_c)
-    if kind_c == EXACT:
-        if a_c - reach > exact_above:
-            return a_c - reach
-    elif kind_c == INTERPOLATED:
-        if a_c - slack - reach > exact_above:
-            return a_c - slack - reach
-    elif d_c - reach > exact_above:  # outside the grid: d_c bounds from below
-        return d_c - reach
-    # an upper bound: exact distances of points of the link (less the capsule's radius:
-    # the points are on its axis), or, failing those, one from the centre's bound
-    if kind_c == EXACT:
-        upper = a_c - margin
-    elif kind_c == INTERPOLATED:
-        upper = a_c + slack - margin
-    else:  # outside the grid: the farthest corner of the mesh's box is a surface bound
-        far2 = 0.0
-        for a in range(3):
-            e = max(abs(t[a] - _lo[a]), abs(t[a] - _hi[a]))
-            far2 += e * e
-        upper = math.sqrt(far2) - margin
-    x = np.empty(3)
-    n_pts = 5 if typ == gjk.CAPSULE else 8
-    for k in range(n_pts):
-        if typ == gjk.CAPSULE:
-            z = -prm[1] + 2 * prm[1] * k / 4
-            for i in range(3):
-                x[i] = t[i] + R[i, 2] * z
-        else:
-            for i in range(3):
-                x[i] = t[i]
-                for j in range(3):
-                    sg = 1.0 if (k >> j) & 1 else -1.0
-                    x[i] += R[i, j] * sg * prm[j]
-        d, kind = point_sdf_kind(pk, x[0], x[1], x[2])
-        if kind == EXACT:
-            upper = min(upper, abs(d) - margin)
+    # rigorous bounds from the field's nodes at points of the link: the capsule's axis
+    # every <= AXIS_STEP_MM (a point of the axis is within half a step of one of them), or
+    # the box's centre (the box is within `reach` of it)
+    lower = np.inf
+    upper = np.inf
+    if typ == gjk.CAPSULE:
+        n_pts = max(2, int(math.ceil(2 * prm[1] / AXIS_STEP_MM)) + 1)
+        half_step = prm[1] / (n_pts - 1)
+        for k in range(n_pts):
+            z = -prm[1] + 2 * prm[1] * k / (n_pts - 1)
+            lo_k, hi_k = abs_bounds(pk, t[0] + R[0, 2] * z, t[1] + R[1, 2] * z, t[2] + R[2, 2] * z)
+            lower = min(lower, lo_k)
+            upper = min(upper, hi_k)
+        lower -= half_step + margin
+        upper -= margin
+    else:
+        lo_c, hi_c = abs_bounds(pk, t[0], t[1], t[2])
+        lower = lo_c - reach
+        upper = hi_c
+    if lower > exact_above:
+        return lower
     # exact: triangles of the buckets within `upper` (+ the margin) of the core
     r = max(upper + margin, 0.0) + 1e-6
     lo_b = np.empty(3, np.int64)

@@ -225,6 +225,48 @@ def _interp(
 
 
 @njit(cache=True)
+def abs_bounds(pk: MeshPack, px: float, py: float, pz: float) -> tuple[float, float]:
+    """Rigorous (lower, upper) bounds of the distance from a point to the surface, from the
+    8 grid nodes around it alone (no triangle search): ``|node| ∓ node distance``, a far
+    node's value being low by at most h·√3/2. Outside the grid: the distances to the mesh's
+    box and to its farthest corner."""
+    origin, h, v, band, lo, hi = pk[0], pk[1], pk[2], pk[3], pk[4], pk[5]
+    nx, ny, nz = v.shape
+    fx = (px - origin[0]) / h
+    fy = (py - origin[1]) / h
+    fz = (pz - origin[2]) / h
+    if fx < 0 or fy < 0 or fz < 0 or fx > nx - 1 or fy > ny - 1 or fz > nz - 1:
+        s_lo = 0.0
+        s_hi = 0.0
+        p = (px, py, pz)
+        for a in range(3):
+            d = max(lo[a] - p[a], 0.0, p[a] - hi[a])
+            s_lo += d * d
+            e = max(abs(p[a] - lo[a]), abs(p[a] - hi[a]))
+            s_hi += e * e
+        return math.sqrt(s_lo), math.sqrt(s_hi)
+    i = min(int(fx), nx - 2)
+    j = min(int(fy), ny - 2)
+    m = min(int(fz), nz - 2)
+    tx, ty, tz = fx - i, fy - j, fz - m
+    lower = 0.0
+    upper = np.inf
+    for di in range(2):
+        for dj in range(2):
+            for dm in range(2):
+                ex = (tx - di) * h
+                ey = (ty - dj) * h
+                ez = (tz - dm) * h
+                dist = math.sqrt(ex * ex + ey * ey + ez * ez)
+                a = abs(v[i + di, j + dj, m + dm])
+                lower = max(lower, a - dist - 1e-4)  # float32 nodes
+                if a > band:
+                    a += h * 0.8660254037844387
+                upper = min(upper, a + dist + 1e-4)
+    return lower, upper
+
+
+@njit(cache=True)
 def point_sdf(pk: MeshPack, px: float, py: float, pz: float) -> float:
     """Signed distance of one point (``DistanceField.__call__``), for compiled callers."""
     return point_sdf_kind(pk, px, py, pz)[0]
@@ -286,7 +328,7 @@ def point_sdf_kind(pk: MeshPack, px: float, py: float, pz: float) -> tuple[float
                         lb = math.sqrt(ex * ex + ey * ey + ez * ez) - _tr[f]
                         if lb > 0 and lb * lb > best:
                             continue
-                        cx, cy, cz, feat = _closest_on_triangle(px, py, pz, V[F[f, 0]],
+                        cx, cy, cz, feat = closest_on_triangle(px, py, pz, V[F[f, 0]],
                                                                 V[F[f, 1]], V[F[f, 2]])  # fmt: skip
                         dx, dy, dz = px - cx, py - cy, pz - cz
                         d2 = dx * dx + dy * dy + dz * dz
@@ -366,7 +408,7 @@ def mesh_arrays(mesh: trimesh.Trimesh, bucket_mm: float = BUCKET_MM) -> MeshArra
 
 
 @njit(cache=True, inline="always")
-def _closest_on_triangle(
+def closest_on_triangle(
     px: float, py: float, pz: float, a: np.ndarray, b: np.ndarray, c: np.ndarray
 ) -> tuple[float, float, float, int]:
     """Closest point of triangle abc to p and its feature: 0 face, 1/2/3 vertex a/b/c,
@@ -443,7 +485,7 @@ def _band_kernel(
                 py = origin[1] + j * h
                 for k in range(lo_i[2], hi_i[2] + 1):
                     pz = origin[2] + k * h
-                    cx, cy, cz, feat = _closest_on_triangle(px, py, pz, a, b, c)
+                    cx, cy, cz, feat = closest_on_triangle(px, py, pz, a, b, c)
                     dx, dy, dz = px - cx, py - cy, pz - cz
                     d2 = dx * dx + dy * dy + dz * dz
                     if d2 < d2_best[i, j, k]:
