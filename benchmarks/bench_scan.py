@@ -7,7 +7,8 @@ hypothesis set takes on one core. Prints figures; asserts nothing.
 
 The scans must have been imported first (docs/objects.md, "Using YCB scans"), e.g.
 
-    handbench objects import /tmp/ycb/master_chef_can.stl --like coffee_can --key ycb_master_chef_can
+    handbench objects import /tmp/ycb/master_chef_can.stl --like coffee_can \
+        --key ycb_master_chef_can
 
 With ``--decimate N`` the script also imports a copy of each scan simplified to N faces
 (registered in this process only, its field cached as usual), to measure e.g. a 16k-face
@@ -70,7 +71,7 @@ def time_object(key: str, design: ThumbDesign, s: SimSettings, stride: int) -> t
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--engine", default="compiled", choices=("compiled", "fcl"))
     ap.add_argument("--stride", type=int, default=10)
     ap.add_argument("--cmc", type=float, default=0.0)

@@ -67,7 +67,7 @@ def _seg_seg2(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) ->
     f = d2 @ r
     eps = 1e-18
     if a <= eps and e <= eps:
-        return r @ r
+        return float(r @ r)
     if a <= eps:
         s = 0.0
         t = min(max(f / e, 0.0), 1.0)
@@ -88,7 +88,7 @@ def _seg_seg2(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) ->
                 t = 1.0
                 s = min(max((b - c) / a, 0.0), 1.0)
     w = p1 + d1 * s - (p2 + d2 * t)
-    return w @ w
+    return float(w @ w)
 
 
 @njit(cache=True)
@@ -118,7 +118,7 @@ def segment_triangle_distance(
     best = min(best, _seg_seg2(s0, s1, a, b))
     best = min(best, _seg_seg2(s0, s1, b, c))
     best = min(best, _seg_seg2(s0, s1, c, a))
-    return math.sqrt(best)
+    return float(math.sqrt(best))
 
 
 #: Spacing (mm) of the capsule axis points whose field bounds screen a query.

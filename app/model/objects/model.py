@@ -55,7 +55,8 @@ class GraspObject:
         """Signed distance (mm) of points (N, 3) in the object frame -> (N,), negative inside.
 
         Exact outside; inside, unions of primitives give the largest primitive depth (a
-        lower bound of the true depth).
+        lower bound of the true depth). Imported meshes: exact within 8 mm of the surface,
+        within about 1 mm (the distance field's spacing) farther (``distance_field``).
         """
         p = np.asarray(p_object, dtype=float).reshape(-1, 3)
         return self._geometry.sdf(p)
