@@ -11,9 +11,9 @@ and closing stages). It prints, it does not assert.
 
 The floor column (``--floor``) is the agreement of the FCL engine with itself when its final
 joint angles are moved by a random ±``--floor-rad`` (default 1e-7 rad) before the contacts and
-the judge: contact patches are centred on FCL's nearest point, which jumps along a link lying
-parallel to a flat face, so outcomes that flip under such a perturbation cannot be reproduced
-by any engine that is not bit-identical.
+the judge: outcomes that flip under such a perturbation cannot be reproduced by any engine
+that is not bit-identical (up to engine 5, patches were centred on FCL's nearest point, which
+jumps along a link lying parallel to a flat face; since engine 6 they are not).
 
     python benchmarks/bench_engine_agreement.py [--stride 7] [--full] [--objects a,b]
 """
