@@ -6,6 +6,7 @@ import fcl
 import numpy as np
 import pytest
 
+from app.model.hand.geometry import CapsuleShape
 from app.model.hand.model import build_hand
 from app.model.objects import load_object
 from app.sim.contacts import _samples, near_surface
@@ -44,8 +45,6 @@ def test_screened_patch_points_equal_dense_evaluation(key: str) -> None:
 
 def _lying(shape: object, centre: np.ndarray, axis: np.ndarray, up: np.ndarray) -> np.ndarray:
     """T_object_link of a capsule link whose axis lies along ``axis`` through ``centre``."""
-    from app.model.hand.geometry import CapsuleShape
-
     assert isinstance(shape, CapsuleShape)
     z = axis / np.linalg.norm(axis)
     x = up / np.linalg.norm(up)
@@ -89,6 +88,7 @@ def test_flat_patch_is_stable_under_tiny_rotations(case: tuple) -> None:
     hand = build_hand(0.0, 45.0)
     j = [lk.name for lk in hand.links].index(link_name)
     shape = hand.links[j].shape
+    assert isinstance(shape, CapsuleShape)
     out_v = np.asarray(out, float)
     centre = np.asarray(face_point, float) + (shape.radius + 0.5) * out_v
     T = _lying(shape, centre, np.asarray(axis, float), out_v)
@@ -119,3 +119,62 @@ def test_flat_patch_is_stable_under_tiny_rotations(case: tuple) -> None:
     if two_places:  # both places are kept
         y = ref.p_object[:, 1]
         assert (y < -8.0).any() and (y > 8.0).any()
+
+
+@pytest.mark.parametrize("key", ["small_marker", "plastic_pear", "washer", "chips_can",
+                                 "coffee_can", "power_drill"])  # fmt: skip
+def test_compiled_sdf_equals_numpy(key: str) -> None:
+    """The compiled signed distance of every built-in object equals the numpy one (random
+    points near the surface, inside, and far outside the tables)."""
+    from app.sim.sdf_compiled import object_program, sdf_many
+
+    obj = load_object(key)
+    prog = object_program(obj)
+    assert prog is not None
+    rng = np.random.default_rng(11)
+    v = obj.mesh.vertices
+    p = np.vstack([
+        v[rng.integers(len(v), size=3000)] + rng.normal(scale=s, size=(3000, 3))
+        for s in (0.3, 3.0, 30.0, 80.0)
+    ])  # fmt: skip
+    np.testing.assert_allclose(sdf_many(p, prog), obj.sdf(p), rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("key", ["plastic_pear", "washer", "coffee_can", "power_drill"])
+def test_compiled_contacts_equal_numpy(key: str) -> None:
+    """The compiled contact path gives the numpy path's contact set (points, normals, links,
+    palmar flags) for hands posed touching the object, wherever GJK and FCL agree on which
+    links are within tol (they differ by FCL's ~1e-4 mm error only)."""
+    from app.sim.contacts import ContactSettings, contacts_of_links
+    from app.sim.contacts_compiled import contacts_compiled
+    from app.sim.simulate import cached_kit
+
+    obj = load_object(key)
+    kit = cached_kit(0.0, 45.0, "ulnar")
+    settings = ContactSettings()
+    rng = np.random.default_rng(5)
+    surface = obj.mesh.vertices
+    n_touch = 0
+    for _ in range(25):
+        q = kit.q_open + rng.uniform(0.0, 1.2, kit.q_open.shape)
+        T_palm = np.eye(4)
+        T_palm[:3, :3], _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        T_links = kit.hand.link_poses(q)
+        j = int(rng.integers(len(T_links)))
+        p_link, _ = _samples(kit.shapes[j], 1.0)
+        anchor = surface[rng.integers(len(surface))]
+        # link j's first sample on a random surface vertex, give or take a millimetre
+        p_palm = T_links[j][:3, :3] @ p_link[0] + T_links[j][:3, 3]
+        T_palm[:3, 3] = anchor - T_palm[:3, :3] @ p_palm + rng.normal(scale=0.7, size=3)
+        T = T_palm @ T_links
+        a = contacts_of_links(obj, kit.names, kit.shapes, kit.moving, T, kit.T_link_fcl,
+                              settings, 75.0)  # fmt: skip
+        c = contacts_compiled(obj, kit.names, kit.shapes, T, settings, 75.0)
+        assert c is not None
+        assert a.links == c.links
+        assert np.array_equal(a.link, c.link)
+        np.testing.assert_allclose(c.p_object, a.p_object, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(c.n_object, a.n_object, rtol=0, atol=1e-9)
+        assert np.array_equal(a.palmar, c.palmar)
+        n_touch += len(a) > 0
+    assert n_touch >= 15

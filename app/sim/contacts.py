@@ -104,16 +104,27 @@ def near_surface(
     return idx[sd <= tol], int(idx[np.argmin(sd)])
 
 
+#: Squared distances (mm²) within this of the largest count as tied in farthest-point
+#: sampling (the lowest index wins), so that rounding never decides between the equidistant
+#: samples of a band (and the compiled path picks the same points).
+FPS_TIE_MM2 = 1e-6
+
+
+def _argmax_tie(d: np.ndarray) -> int:
+    return int(np.flatnonzero(d >= d.max() - FPS_TIE_MM2)[0])
+
+
 def farthest_points(p: np.ndarray, m: int) -> np.ndarray:
     """Indices of up to ``m`` points of ``p`` (K, 3) spread by farthest-point sampling
-    (deterministic: the first is the point farthest from the mean, ties to the lowest index)."""
+    (deterministic: the first is the point farthest from the mean; near-ties go to the lowest
+    index, ``FPS_TIE_MM2``)."""
     if len(p) <= m:
         return np.arange(len(p))
     centre = p.mean(0)
-    idx = [int(np.argmax(((p - centre) ** 2).sum(1)))]
+    idx = [_argmax_tie(((p - centre) ** 2).sum(1))]
     d = ((p - p[idx[0]]) ** 2).sum(1)
     for _ in range(m - 1):
-        i = int(np.argmax(d))
+        i = _argmax_tie(d)
         idx.append(i)
         d = np.minimum(d, ((p - p[i]) ** 2).sum(1))
     return np.array(idx)

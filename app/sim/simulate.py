@@ -118,8 +118,23 @@ class HandKit:
         self, obj: GraspTarget, T_links: np.ndarray, idx: list[int], settings: SimulationSettings
     ) -> tuple[ContactSet, int]:
         """Contacts of links ``idx`` posed at ``T_links`` (16, 4, 4) in the object frame, and
-        the FCL queries spent."""
+        the distance queries spent (the compiled engine computes them in one compiled call,
+        ``app.sim.contacts_compiled``, where the object allows)."""
         counter = [0]
+        if settings.closing.engine == "compiled":
+            from app.sim.contacts_compiled import contacts_compiled
+
+            got = contacts_compiled(
+                obj,
+                [self.names[j] for j in idx],
+                [self.shapes[j] for j in idx],
+                T_links[idx],
+                settings.contact,
+                settings.grasp_type.palmar_angle_deg,
+                counter,
+            )
+            if got is not None:
+                return got, counter[0]
         cs = contacts_of_links(
             obj,
             [self.names[j] for j in idx],
