@@ -571,11 +571,12 @@ def advance_stage_compiled(
         arrays.typ, arrays.prm, arrays.R, arrays.t, arrays.vstart, arrays.verts,
         is_obj, m, sph, float(tol), int(max_steps), REFINE_ITERS, REFINE_BAND, counters,
     )  # fmt: skip
+    lk, jt = links.tolist(), joints.tolist()
     return (
         qn,
         EVENT_KINDS[code],
-        tuple(int(i) for i in np.flatnonzero(links)),
-        tuple(int(i) for i in np.flatnonzero(joints)),
+        tuple(i for i in range(3) if lk[i]),
+        tuple(i for i in range(3) if jt[i]),
     )
 
 

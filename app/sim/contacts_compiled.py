@@ -37,8 +37,48 @@ from app.sim.sdf_compiled import SdfProgram, object_program, sdf_point
 
 LinkTables = tuple[
     np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-    np.ndarray, np.ndarray, np.ndarray,
+    np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
 ]  # fmt: skip
+
+#: Cell size (mm) of the super-coarse samples that screen the coarse ones.
+SUPER_CELL_MM = 12.0
+
+
+def _piece_spheres(arr: Any) -> np.ndarray:
+    """(P, 4) a bounding sphere (centre, radius) of each piece, object frame."""
+    out = np.zeros((len(arr), 4))
+    for p in range(len(arr)):
+        v = arr.verts[arr.vstart[p] : arr.vstart[p + 1]]
+        if len(v):
+            c = 0.5 * (v.min(0) + v.max(0))
+            r = float(np.linalg.norm(v - c, axis=1).max())
+        else:
+            c = np.zeros(3)
+            typ, prm = arr.typ[p], arr.prm[p]
+            if typ == gjk.BOX:
+                r = float(np.linalg.norm(prm))
+            elif typ == gjk.CYLINDER:
+                r = float(np.hypot(prm[0], prm[1]))
+            else:  # capsule, sphere
+                r = float(prm[0] + prm[1])
+        out[p, :3] = arr.R[p] @ c + arr.t[p]
+        out[p, 3] = r + 1e-6
+    return out
+
+
+_SPHERES: dict[int, tuple[Any, np.ndarray]] = {}
+
+
+def piece_spheres(arr: Any) -> np.ndarray:
+    """``_piece_spheres`` cached per arrays object."""
+    hit = _SPHERES.get(id(arr))
+    if hit is not None and hit[0] is arr:
+        return hit[1]
+    if len(_SPHERES) >= 64:
+        _SPHERES.clear()
+    out = _piece_spheres(arr)
+    _SPHERES[id(arr)] = (arr, out)
+    return out
 
 
 @lru_cache(maxsize=256)
@@ -46,25 +86,45 @@ def link_tables(shapes: tuple[Shape, ...], spacing: float) -> LinkTables:
     """The links' shapes, samples and coarse screening as flat arrays, ``contacts_kernel``'s
     order: (T_link_fcl (L, 4, 4), type (L,), prm (L, 3), reach (L,), samples (S, 3) link
     frames, sample offsets (L + 1,), coarse indices (C,) local to their link, coarse offsets
-    (L + 1,), assignment (S,) local to the link's coarse samples, δ (L,))."""
+    (L + 1,), assignment (S,) local to the link's coarse samples, each sample's distance to
+    its coarse sample (S,), the super-coarse sample of each coarse sample (C,) (local
+    coarse index; super-coarse samples are coarse samples, one per ``SUPER_CELL_MM`` cell,
+    assigned to themselves), the coarse sample's distance to it (C,), the largest distance
+    of a sample to its coarse sample (C,))."""
     la = link_arrays(list(shapes), np.tile(np.eye(4), (len(shapes), 1, 1)))
     T_fcl = np.stack([s.T_link_fcl() for s in shapes])
     reach = np.array([_reach(s) for s in shapes])
-    samp, soff, cidx, coff, assign, delta = [], [0], [], [0], [], []
+    from scipy.spatial import cKDTree
+
+    samp, soff, cidx, coff, assign, dist = [], [0], [], [0], [], []
+    sup, dcs, cmax = [], [], []
     for s in shapes:
         p, _ = _samples(s, spacing)
-        idx_c, asg, d = _coarse(s, spacing)
+        idx_c, asg, _ = _coarse(s, spacing)
         samp.append(p)
         soff.append(soff[-1] + len(p))
         cidx.append(idx_c)
         coff.append(coff[-1] + len(idx_c))
         assign.append(asg)
-        delta.append(d)
+        dist.append(np.linalg.norm(p - p[idx_c][asg], axis=1))
+        pc = p[idx_c]
+        cell = np.floor(pc / SUPER_CELL_MM).astype(np.int64)
+        _, first = np.unique(cell, axis=0, return_index=True)
+        first = np.sort(first)
+        d_s, a_s = cKDTree(pc[first]).query(pc)
+        a_s = first[np.asarray(a_s)]
+        a_s[first] = first  # a super-coarse sample screens itself (ties in the tree)
+        sup.append(a_s.astype(np.int64))
+        dcs.append(np.linalg.norm(pc - pc[a_s], axis=1))
+        cm = np.zeros(len(idx_c))
+        np.maximum.at(cm, asg, dist[-1])
+        cmax.append(cm)
     return (
         np.ascontiguousarray(T_fcl), la.typ, la.prm, reach,
         np.ascontiguousarray(np.concatenate(samp)), np.array(soff, np.int64),
         np.concatenate(cidx).astype(np.int64), np.array(coff, np.int64),
-        np.concatenate(assign).astype(np.int64), np.array(delta),
+        np.concatenate(assign).astype(np.int64), np.concatenate(dist),
+        np.concatenate(sup), np.concatenate(dcs), np.concatenate(cmax),
     )  # fmt: skip
 
 
@@ -93,13 +153,17 @@ def contacts_kernel(
     cidx: np.ndarray,
     coff: np.ndarray,
     assign: np.ndarray,
-    delta: np.ndarray,
+    sdist: np.ndarray,
+    sup: np.ndarray,
+    dcs: np.ndarray,
+    cmax: np.ndarray,
     otyp: np.ndarray,
     oprm: np.ndarray,
     oR: np.ndarray,
     ot: np.ndarray,
     vstart: np.ndarray,
     verts: np.ndarray,
+    ospheres: np.ndarray,
     centroid: np.ndarray,
     r_obj: float,
     prog: SdfProgram,
@@ -111,7 +175,12 @@ def contacts_kernel(
     tie: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, int]:
     """Contacts of links posed at ``T_links`` (L, 4, 4): (points (n, 3), contact normals
-    (n, 3), link of each (n,), palmar (n,), n, distance queries) in rows ``[:n]``."""
+    (n, 3), link of each (n,), palmar (n,), n, distance queries) in rows ``[:n]``.
+
+    Screening as the numpy path's, exact, with per-sample bounds: a sample at distance
+    ``sdist`` from its coarse sample has a signed distance >= the coarse value - L·sdist (L
+    the Lipschitz bound), so only samples whose bound is <= max(tol, the smallest coarse
+    value) are evaluated; pieces whose bounding sphere is farther than tol are not queried."""
     L = len(T_links)
     P = np.empty((L * max_pts, 3))
     N = np.empty((L * max_pts, 3))
@@ -128,6 +197,13 @@ def contacts_kernel(
             continue
         best = np.inf
         for p in range(n_obs):
+            ex, ey, ez = (
+                Tb[0, 3] - ospheres[p, 0],
+                Tb[1, 3] - ospheres[p, 1],
+                Tb[2, 3] - ospheres[p, 2],
+            )
+            if math.sqrt(ex * ex + ey * ey + ez * ez) - reach[l] - ospheres[p, 3] > tol:
+                continue
             d = gjk.shape_distance(
                 ltyp[l], lprm[l], Tb[:3, :3], Tb[:3, 3],
                 otyp[p], oprm[p], oR[p], ot[p], verts, 0, 0, vstart[p], vstart[p + 1],
@@ -140,23 +216,44 @@ def contacts_kernel(
         # coarse samples, then the samples whose coarse sample may be within tol
         c0, c1 = coff[l], coff[l + 1]
         s0, s1 = soff[l], soff[l + 1]
+        # (super-coarse samples first: a coarse sample whose bound from its super-coarse
+        # sample keeps all its samples above tol gets that bound instead of its value)
         sd_c = np.empty(c1 - c0)
+        exact = np.zeros(c1 - c0, np.bool_)
+        for sweep in range(3):
+            for c in range(c0, c1):
+                if exact[c - c0]:
+                    continue
+                if sweep == 0 and sup[c] != c - c0:
+                    continue
+                if sweep == 1:
+                    lb = sd_c[sup[c]] - lip * dcs[c]
+                    if lb - lip * cmax[c] > tol:
+                        sd_c[c - c0] = lb
+                        continue
+                k = s0 + cidx[c]
+                x = T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2]
+                y = T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2]
+                z = T[2, 0] * samp[k, 0] + T[2, 1] * samp[k, 1] + T[2, 2] * samp[k, 2]
+                sd_c[c - c0] = sdf_point(x + T[0, 3], y + T[1, 3], z + T[2, 3], prog)
+                exact[c - c0] = True
+            if sweep == 1:
+                m_min = np.inf
+                for c in range(c1 - c0):
+                    if exact[c] and sd_c[c] < m_min:
+                        m_min = sd_c[c]
+                if m_min <= tol:
+                    break  # else (a grazing contact): every coarse value, for the nearest
         m_min = np.inf
-        for c in range(c0, c1):
-            k = s0 + cidx[c]
-            x = T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2] + T[0, 3]
-            y = T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2] + T[1, 3]
-            z = T[2, 0] * samp[k, 0] + T[2, 1] * samp[k, 1] + T[2, 2] * samp[k, 2] + T[2, 3]
-            v = sdf_point(x, y, z, prog)
-            sd_c[c - c0] = v
-            if v < m_min:
-                m_min = v
-        bound = max(tol, m_min) + lip * delta[l]
+        for c in range(c1 - c0):
+            if exact[c] and sd_c[c] < m_min:
+                m_min = sd_c[c]
+        bound = max(tol, m_min)
         sel = np.empty(s1 - s0, np.int64)
         n_sel = 0
         near, near_v = -1, np.inf
         for k in range(s0, s1):
-            if sd_c[assign[k]] > bound:
+            if sd_c[assign[k]] - lip * sdist[k] > bound:
                 continue
             x = T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2] + T[0, 3]
             y = T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2] + T[1, 3]
@@ -246,7 +343,7 @@ def contacts_compiled(
     tables = link_tables(tuple(shapes), float(settings.sample_spacing_mm))
     P, N, link, pal, n, queries = contacts_kernel(
         np.ascontiguousarray(T_object_links, float), *tables,
-        arr.typ, arr.prm, arr.R, arr.t, arr.vstart, arr.verts,
+        arr.typ, arr.prm, arr.R, arr.t, arr.vstart, arr.verts, piece_spheres(arr),
         np.asarray(obj.centroid_object, float), float(obj.max_radius), prog,
         float(settings.contact_tol_mm), int(settings.max_points_per_link),
         float(np.cos(np.deg2rad(palmar_angle_deg))), SDF_LIPSCHITZ, NORMAL_STEP_MM,
