@@ -106,8 +106,9 @@ def main() -> None:
         pairs = [[float(x) for x in d.split("/")] for d in a.designs.split(",")]
         designs = [ThumbDesign(c, m) for c, m in pairs]
         stride = a.stride
-    sF = SimSettings()
-    sC = dataclasses.replace(sF, closing=dataclasses.replace(sF.closing, engine="compiled"))
+    s0 = SimSettings()
+    sF = dataclasses.replace(s0, closing=dataclasses.replace(s0.closing, engine="fcl"))
+    sC = dataclasses.replace(s0, closing=dataclasses.replace(s0.closing, engine="compiled"))
     _instrument()
     print(f"load average at start: {os.getloadavg()}")
     # JIT: compile (or load numba's on-disk cache) once before timing

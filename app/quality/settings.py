@@ -50,9 +50,9 @@ class SimSettings:
     def key(self) -> str:
         """Stable hash of all settings (store key).
 
-        The closing engine enters the key only when it is not the default 'fcl', so the keys
-        (and stored results) from before the field existed stay valid, while compiled-engine
-        results are never mixed with FCL ones."""
+        The closing engine enters the key only when it is 'compiled' (the default since
+        engine 6), as it did when 'fcl' was the default, so the two engines' results are never
+        mixed."""
         from app.hashing import stable_hash
 
         d = self.as_dict()
