@@ -46,7 +46,9 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(VENV)/bin/pyright
 
+# (warm first: tests that time worker pools must not time numba compiling in every worker)
 pytest: $(STAMP) chromium
+	$(PY) -m app.sim.warm
 	$(PY) -m pytest -q
 
 test: lint typecheck pytest
