@@ -34,7 +34,7 @@ class _Settings:
     grasp_type: _Palmar = field(default_factory=_Palmar)
 
 
-def warm(key: str = "power_drill") -> float:
+def warm(key: str = "washer") -> float:
     """Simulate one hypothesis of ``key`` (the first whose approach touches) on the compiled
     engine; seconds taken. Any built-in object compiles every kernel: numba compiles a
     function for its argument types, all branches of the signed distance included."""
