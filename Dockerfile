@@ -15,6 +15,9 @@ COPY objects ./objects
 COPY static ./static
 # editable install: the data folders (hand_models/, objects/) are read next to app/
 RUN pip install --no-cache-dir -e .
+# compile the compiled engine's numba kernels into their on-disk cache (about a minute), so
+# that the first live score does not pay it
+RUN python -m app.sim.warm
 
 ENV HANDBENCH_STORE=/data/results.sqlite
 VOLUME ["/data"]

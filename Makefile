@@ -20,7 +20,10 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install -q -e '.[test]'
 	@touch $(STAMP)
 
+# setup also warms numba's on-disk cache of the compiled engine (its first call compiles
+# for about a minute; every later process loads the machine code in under a second)
 setup: $(STAMP)
+	$(PY) -m app.sim.warm
 
 chromium:
 	@if [ -x $(CHROMIUM) ]; then :; \
@@ -43,7 +46,9 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(VENV)/bin/pyright
 
+# (warm first: tests that time worker pools must not time numba compiling in every worker)
 pytest: $(STAMP) chromium
+	$(PY) -m app.sim.warm
 	$(PY) -m pytest -q
 
 test: lint typecheck pytest

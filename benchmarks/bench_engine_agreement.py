@@ -11,9 +11,9 @@ and closing stages). It prints, it does not assert.
 
 The floor column (``--floor``) is the agreement of the FCL engine with itself when its final
 joint angles are moved by a random ±``--floor-rad`` (default 1e-7 rad) before the contacts and
-the judge: contact patches are centred on FCL's nearest point, which jumps along a link lying
-parallel to a flat face, so outcomes that flip under such a perturbation cannot be reproduced
-by any engine that is not bit-identical.
+the judge: outcomes that flip under such a perturbation cannot be reproduced by any engine
+that is not bit-identical (up to engine 5, patches were centred on FCL's nearest point, which
+jumps along a link lying parallel to a flat face; since engine 6 they are not).
 
     python benchmarks/bench_engine_agreement.py [--stride 7] [--full] [--objects a,b]
 """
@@ -106,8 +106,9 @@ def main() -> None:
         pairs = [[float(x) for x in d.split("/")] for d in a.designs.split(",")]
         designs = [ThumbDesign(c, m) for c, m in pairs]
         stride = a.stride
-    sF = SimSettings()
-    sC = dataclasses.replace(sF, closing=dataclasses.replace(sF.closing, engine="compiled"))
+    s0 = SimSettings()
+    sF = dataclasses.replace(s0, closing=dataclasses.replace(s0.closing, engine="fcl"))
+    sC = dataclasses.replace(s0, closing=dataclasses.replace(s0.closing, engine="compiled"))
     _instrument()
     print(f"load average at start: {os.getloadavg()}")
     # JIT: compile (or load numba's on-disk cache) once before timing

@@ -7,11 +7,14 @@
 - peak RSS of this process and its workers
 
 Usage: .venv/bin/python benchmarks/bench_sweep.py [--workers N] [--full] [--sample K]
+       [--engine fcl|compiled] [--no-sweep]
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import os
 import resource
 import shutil
 import tempfile
@@ -30,9 +33,15 @@ from app.sim.hypothesis_sets import cached_hypotheses
 from app.sim.simulate import cached_kit, simulate_base, simulate_thumb
 
 
-def per_core_rates(sample: int) -> None:
-    """Single-process timing of the two stages on every ``sample``-th GH of each object."""
+def settings_of(engine: str) -> SimSettings:
+    """The default settings with the closing engine ``engine``."""
     s = SimSettings()
+    return dataclasses.replace(s, closing=dataclasses.replace(s.closing, engine=engine))
+
+
+def per_core_rates(sample: int, engine: str) -> None:
+    """Single-process timing of the two stages on every ``sample``-th GH of each object."""
+    s = settings_of(engine)
     kit = cached_kit(0.0, 45.0, "ulnar")
     tb = tt = 0.0
     nb = nq_b = nq_t = 0
@@ -45,10 +54,12 @@ def per_core_rates(sample: int) -> None:
     siblings = [cached_kit(0.0, m, "ulnar") for m in (0.0, 15.0, 30.0, 60.0, 75.0, 90.0)]
     tj = ts = 0.0
     ns = 0
+    cpu = 0.0  # process CPU time of base + thumb + judge (robust to a busy machine)
     for key in OBJECT_KEYS:
         obj, hy = load_object(key), cached_hypotheses(key)
         for i in range(0, len(hy), sample):
             sb = ClosingStats()
+            c0 = time.process_time()
             t0 = time.perf_counter()
             base = simulate_base(kit, obj, hy, i, s, sb)
             t1 = time.perf_counter()
@@ -56,6 +67,7 @@ def per_core_rates(sample: int) -> None:
             t2 = time.perf_counter()
             judge(g, obj, s, 0)
             t3 = time.perf_counter()
+            cpu += time.process_time() - c0
             for k in siblings:  # the other MCP angles of c = 0 on the same base (CMC memo)
                 simulate_thumb(k, obj, base, s)
             t4 = time.perf_counter()
@@ -82,14 +94,22 @@ def per_core_rates(sample: int) -> None:
     )
     print(f"judge (force closure + grasp type)   : {nb / tj:8.1f} GH/s per core")
     print(f"full closing (base + thumb + judge)  : {nb / (tb + tt + tj):8.1f} GH/s per core")
+    print(f"the same in CPU time                 : {1e3 * cpu / nb:8.2f} ms per GH")
 
 
-def timed_sweep(designs: list[ThumbDesign], workers: int, store_path: Path) -> float:
+def timed_sweep(designs: list[ThumbDesign], workers: int, store_path: Path, engine: str) -> float:
     with ResultStore(store_path) as store:
         ex = LocalExecutor(workers)
         try:
             t0 = time.perf_counter()
-            res = run_sweep(designs, OBJECT_KEYS, store=store, executor=ex, progress=False)
+            res = run_sweep(
+                designs,
+                OBJECT_KEYS,
+                settings=settings_of(engine),
+                store=store,
+                executor=ex,
+                progress=False,
+            )
             dt = time.perf_counter() - t0
         finally:
             ex.close()
@@ -108,22 +128,29 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--full", action="store_true", help="also time the 28-design sweep")
     ap.add_argument("--sample", type=int, default=20, help="GH stride for per-core rates")
+    ap.add_argument("--engine", default=SimSettings().closing.engine, choices=("fcl", "compiled"))
+    ap.add_argument("--no-sweep", action="store_true", help="per-core rates only")
     args = ap.parse_args()
-    per_core_rates(args.sample)
+    print(f"engine {args.engine}, load average at start: {os.getloadavg()}")
+    per_core_rates(args.sample, args.engine)
+    if args.no_sweep:
+        print(f"load average at end: {os.getloadavg()}")
+        return
     tmp = Path(tempfile.mkdtemp(prefix="handbench-bench-"))
     try:
         n = sum(len(cached_hypotheses(k)) for k in OBJECT_KEYS)
-        dt = timed_sweep([ThumbDesign(0, 45)], args.workers, tmp / "one.sqlite")
+        dt = timed_sweep([ThumbDesign(0, 45)], args.workers, tmp / "one.sqlite", args.engine)
         print(f"one design, six objects ({n} GHs), cold : {dt:8.1f} s  ({args.workers} workers)")
-        dt = timed_sweep([ThumbDesign(0, 45)], args.workers, tmp / "one.sqlite")
+        dt = timed_sweep([ThumbDesign(0, 45)], args.workers, tmp / "one.sqlite", args.engine)
         print(f"the same, warm store                    : {dt:8.2f} s")
         if args.full:
-            dt = timed_sweep(published_designs(), args.workers, tmp / "all.sqlite")
+            dt = timed_sweep(published_designs(), args.workers, tmp / "all.sqlite", args.engine)
             print(
                 f"28-design sweep, cold                   : {dt:8.1f} s  ({args.workers} workers)"
             )
         me, kids = peak_rss_mib()
         print(f"peak RSS: driver {me:.0f} MiB, largest worker {kids:.0f} MiB")
+        print(f"load average at end: {os.getloadavg()}")
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 

@@ -223,9 +223,18 @@ def _compiled(s: SimSettings) -> SimSettings:
     return dataclasses.replace(s, closing=dataclasses.replace(s.closing, engine="compiled"))
 
 
+def _fcl(s: SimSettings) -> SimSettings:
+    return dataclasses.replace(s, closing=dataclasses.replace(s.closing, engine="fcl"))
+
+
+def test_compiled_engine_is_the_default() -> None:
+    assert ClosingSettings().engine == "compiled"
+    assert SimSettings().key() == _compiled(SimSettings()).key()
+
+
 def _both_engines(kit: HandKit, obj, hyps, i: int, s: SimSettings):
     out = []
-    for settings in (s, _compiled(s)):
+    for settings in (_fcl(s), _compiled(s)):
         st = ClosingStats()
         base = simulate_base(kit, obj, hyps, i, settings, st)
         g = simulate_thumb(kit, obj, base, settings, ClosingStats())
@@ -305,7 +314,7 @@ def test_engine_setting_is_validated() -> None:
 
 
 def test_engine_enters_the_settings_key_only_when_compiled() -> None:
-    s = SimSettings()
+    s = _fcl(SimSettings())
     compiled = _compiled(s)
     assert compiled.key() != s.key()
     d = s.as_dict()

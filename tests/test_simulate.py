@@ -98,3 +98,23 @@ def test_outcomes_do_not_depend_on_the_designs_sharing_a_task() -> None:
     for (_, _, a), (_, b) in zip(alone, mine, strict=True):
         # the query count is bookkeeping: a reused CMC-stage memo spends fewer queries
         assert a.same_as(dataclasses.replace(b, n_queries=a.n_queries))
+
+
+def test_warm_runs_the_compiled_engine(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``python -m app.sim.warm`` (run by ``make setup``) simulates a touching hypothesis on
+    the compiled engine: the closing and contact kernels are called (and so cached)."""
+    from app.sim import closing_compiled, contacts_compiled
+    from app.sim.warm import warm
+
+    calls: list[str] = []
+    for mod, name in ((closing_compiled, "advance_stage_compiled"),
+                      (contacts_compiled, "contacts_compiled")):  # fmt: skip
+        orig = getattr(mod, name)
+
+        def spy(*a: object, _orig: object = orig, _name: str = name, **k: object) -> object:
+            calls.append(_name)
+            return _orig(*a, **k)  # type: ignore[operator]
+
+        monkeypatch.setattr(mod, name, spy)
+    assert warm("washer") > 0
+    assert "advance_stage_compiled" in calls and "contacts_compiled" in calls

@@ -15,7 +15,9 @@ from app.sim.contacts import ContactSettings
 
 #: Bumped whenever a code change alters simulated outcomes: part of the settings key, so a
 #: store never serves results of an older engine as current.
-ENGINE_VERSION = 5  # 5: base stage always by the MCP-0 kit (results independent of grouping)
+ENGINE_VERSION = 6  # 6: a contact patch is every link sample within tol (no 30 mm disc about
+# the nearest point), thinned in the link frame
+# 5: base stage always by the MCP-0 kit (results independent of grouping)
 # 4: stage stop refined by false position (gap within 0.001 mm of tol)
 
 
@@ -48,9 +50,9 @@ class SimSettings:
     def key(self) -> str:
         """Stable hash of all settings (store key).
 
-        The closing engine enters the key only when it is not the default 'fcl', so the keys
-        (and stored results) from before the field existed stay valid, while compiled-engine
-        results are never mixed with FCL ones."""
+        The closing engine enters the key only when it is 'compiled' (the default since
+        engine 6), as it did when 'fcl' was the default, so the two engines' results are never
+        mixed."""
         from app.hashing import stable_hash
 
         d = self.as_dict()

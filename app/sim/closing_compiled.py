@@ -609,11 +609,12 @@ def advance_stage_compiled(
         is_obj, m, sph, float(tol), int(max_steps), REFINE_ITERS, REFINE_BAND, counters,
         _pack(arrays),
     )  # fmt: skip
+    lk, jt = links.tolist(), joints.tolist()
     return (
         qn,
         EVENT_KINDS[code],
-        tuple(int(i) for i in np.flatnonzero(links)),
-        tuple(int(i) for i in np.flatnonzero(joints)),
+        tuple(i for i in range(3) if lk[i]),
+        tuple(i for i in range(3) if jt[i]),
     )
 
 

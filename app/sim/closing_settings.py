@@ -41,10 +41,12 @@ class ClosingSettings:
     where it is and is counted in the statistics)."""
     approach_clearance_mm: float = 250.0
     """The approach starts this far beyond the object's bounding sphere."""
-    engine: ClosingEngine = "fcl"
-    """Distance engine of the approach and closing: 'fcl' (python-fcl queries from Python)
-    or 'compiled' (the same algorithm compiled with numba, exact GJK on the same convex
-    pieces: ``app/sim/closing_compiled.py``). Objects with a mesh piece always use FCL."""
+    engine: ClosingEngine = "compiled"
+    """Distance engine of the approach, closing and contacts: 'compiled' (the default: the
+    same algorithm compiled with numba, exact GJK on the same convex pieces, compiled signed
+    distances: ``app/sim/closing_compiled.py``, ``contacts_compiled.py``) or 'fcl' (the
+    reference: python-fcl queries and numpy signed distances from Python). Imported meshes
+    always use FCL and numpy."""
 
     def __post_init__(self) -> None:
         if self.mode not in CLOSING_MODES:

@@ -1,11 +1,15 @@
 """Contact patches after closing (METHOD §5).
 
 A link is in contact when its FCL distance to the object is within ``contact_tol_mm``.
-Its patch: points sampled on the link surface (about 1 mm apart) whose signed distance
-to the object is within the tolerance; thinned to at most ``max_points_per_link`` by
-farthest-point sampling, which keeps the patch's extent (what resists torsion about the
-line between two fingers). n_contact = minus the object's outward normal at the point, i.e.
-from the link toward the object. Palmar: angle(n_contact, link n_palmar) < threshold.
+Its patch: all points sampled on the link surface (about 1 mm apart) whose signed distance
+to the object is within the tolerance, wherever they lie on the link (no disc about a
+nearest point, which jumps along a link lying parallel to a flat face), or the link's
+sample nearest the object when sampling misses a grazing contact; thinned to at most
+``max_points_per_link`` by farthest-point sampling in the link frame, which keeps the
+patch's extent (what resists torsion about the line between two fingers). A link touching
+in two places keeps points of both: a patch is a contact set, force closure uses every
+point. n_contact = minus the object's outward normal at the point, i.e. from the link toward
+the object. Palmar: angle(n_contact, link n_palmar) < threshold.
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ import numpy as np
 from app.model.contact_set import ContactSet
 from app.model.hand.geometry import Shape
 from app.model.target import GraspTarget
-from app.sim.closing import fcl_transform, pair_nearest
+from app.sim.closing import fcl_transform, pair_distance
 
 
 @dataclass(frozen=True)
@@ -51,8 +55,6 @@ def _samples(shape: Shape, spacing: float) -> tuple[np.ndarray, np.ndarray]:
     return shape.surface_points(spacing)
 
 
-#: A patch holds the link samples within this distance of the link's nearest point (mm).
-PATCH_RADIUS_MM = 30.0
 #: Cell size of the coarse samples that screen a link's surface samples (mm).
 COARSE_CELL_MM = 4.0
 #: Lipschitz constant assumed of object SDFs (exact ones: 1; bilinear tables: <= sqrt 2).
@@ -78,45 +80,51 @@ def near_surface(
     obj: GraspTarget,
     shape: Shape,
     T_object_link: np.ndarray,
-    centre_link: np.ndarray,
-    radius: float,
     tol: float,
     spacing: float,
-) -> np.ndarray:
-    """Indices of the shape's surface samples within ``radius`` of ``centre_link`` (link
-    frame) whose signed distance to the object, with the link posed at ``T_object_link``, is
-    <= ``tol``; in sample order.
+) -> tuple[np.ndarray, int]:
+    """(indices of the shape's surface samples whose signed distance to the object, with the
+    link posed at ``T_object_link``, is <= ``tol``, in sample order; the index of the sample
+    with the smallest signed distance).
 
     Exact screening: the SDF is evaluated on coarse samples first; a sample whose coarse
     sample lies farther than ``tol + L·δ`` from the object (δ the largest sample-to-coarse
     distance, L the SDF's Lipschitz bound) cannot be within ``tol``, so only the others are
-    posed and evaluated."""
+    posed and evaluated. The nearest sample (the fallback of a grazing contact) is exact too:
+    coarse samples are samples, so the nearest one's coarse sample is within L·δ of the
+    smallest coarse value."""
     p_link, _ = _samples(shape, spacing)
     idx_c, assign, delta = _coarse(shape, spacing)
     R, t = T_object_link[:3, :3], T_object_link[:3, 3]
-    pc = p_link[idx_c]
-    use_c = np.flatnonzero(((pc - centre_link) ** 2).sum(1) < (radius + delta) ** 2)
-    keep_c = np.zeros(len(idx_c), dtype=bool)
-    if len(use_c):
-        sd_c = obj.sdf(pc[use_c] @ R.T + t)
-        keep_c[use_c[sd_c <= tol + SDF_LIPSCHITZ * delta]] = True
-    idx = np.flatnonzero(keep_c[assign])
-    idx = idx[((p_link[idx] - centre_link) ** 2).sum(1) < radius**2]
-    if len(idx) == 0:
-        return idx
+    sd_c = obj.sdf(p_link[idx_c] @ R.T + t)
+    m = float(sd_c.min())
+    bound = max(tol, m) + SDF_LIPSCHITZ * delta
+    idx = np.flatnonzero((sd_c <= bound)[assign])
     sd = obj.sdf(p_link[idx] @ R.T + t)
-    return idx[sd <= tol]
+    return idx[sd <= tol], int(idx[np.argmin(sd)])
+
+
+#: Squared distances (mm²) within this of the largest count as tied in farthest-point
+#: sampling (the lowest index wins), so that rounding never decides between the equidistant
+#: samples of a band (and the compiled path picks the same points).
+FPS_TIE_MM2 = 1e-6
+
+
+def _argmax_tie(d: np.ndarray) -> int:
+    return int(np.flatnonzero(d >= d.max() - FPS_TIE_MM2)[0])
 
 
 def farthest_points(p: np.ndarray, m: int) -> np.ndarray:
-    """Indices of up to ``m`` points of ``p`` (K, 3) spread by farthest-point sampling."""
+    """Indices of up to ``m`` points of ``p`` (K, 3) spread by farthest-point sampling
+    (deterministic: the first is the point farthest from the mean; near-ties go to the lowest
+    index, ``FPS_TIE_MM2``)."""
     if len(p) <= m:
         return np.arange(len(p))
     centre = p.mean(0)
-    idx = [int(np.argmax(((p - centre) ** 2).sum(1)))]
+    idx = [_argmax_tie(((p - centre) ** 2).sum(1))]
     d = ((p - p[idx[0]]) ** 2).sum(1)
     for _ in range(m - 1):
-        i = int(np.argmax(d))
+        i = _argmax_tie(d)
         idx.append(i)
         d = np.minimum(d, ((p - p[i]) ** 2).sum(1))
     return np.array(idx)
@@ -126,26 +134,27 @@ def link_patch(
     obj: GraspTarget,
     shape: Shape,
     T_object_link: np.ndarray,
-    nearest_on_link: np.ndarray,
     settings: ContactSettings,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Patch points (K, 3) and contact normals (K, 3) of one touching link, object frame."""
+    """Patch points (K, 3) and contact normals (K, 3) of one touching link, object frame.
+
+    The patch is every surface sample of the link within ``contact_tol_mm`` of the object
+    (a link may touch in separate places: all of them are its contact set), thinned by
+    farthest-point sampling; it does not depend on where a distance query's nearest point
+    lands. When sampling misses a grazing contact (the link is within tol, no sample is),
+    the link's sample nearest the object stands for it."""
     p_link, _ = _samples(shape, settings.sample_spacing_mm)
     R, t = T_object_link[:3, :3], T_object_link[:3, 3]
-    centre_link = (nearest_on_link - t) @ R  # patches reach at most PATCH_RADIUS_MM from it
-    idx = near_surface(
-        obj,
-        shape,
-        T_object_link,
-        centre_link,
-        PATCH_RADIUS_MM,
-        settings.contact_tol_mm,
-        settings.sample_spacing_mm,
+    idx, nearest = near_surface(
+        obj, shape, T_object_link, settings.contact_tol_mm, settings.sample_spacing_mm
     )
+    if len(idx) == 0:
+        idx = np.array([nearest])
+    # thinning in the link frame: distances between samples are then the same numbers
+    # whatever the pose, so a band of equidistant samples (a link parallel to a face) keeps
+    # the same points under any tiny motion instead of breaking its ties differently
+    idx = idx[farthest_points(p_link[idx], settings.max_points_per_link)]
     p = p_link[idx] @ R.T + t
-    if len(p) == 0:  # sampling missed a grazing contact: keep FCL's nearest point
-        p = nearest_on_link[None, :]
-    p = p[farthest_points(p, settings.max_points_per_link)]
     n_out = obj.normal(p)
     return p, -n_out
 
@@ -175,16 +184,14 @@ def contacts_of_links(
         if np.linalg.norm(Tb[:3, 3] - centroid) > r_obj + reach + settings.contact_tol_mm:
             continue
         body.setTransform(fcl_transform(Tb))
-        best = (np.inf, None)
+        best = np.inf
         for piece in pieces:
-            d, pa, _ = pair_nearest(body, piece)
+            best = min(best, pair_distance(body, piece))
             if counter is not None:
                 counter[0] += 1
-            if d < best[0]:
-                best = (d, pa)
-        if best[0] > settings.contact_tol_mm or best[1] is None:
+        if best > settings.contact_tol_mm:
             continue
-        p, n = link_patch(obj, shape, T, best[1], settings)
+        p, n = link_patch(obj, shape, T, settings)
         n_palmar = T[:3, 2]
         cos_lim = np.cos(np.deg2rad(palmar_angle_deg))
         P.append(p)

@@ -97,6 +97,9 @@ class HandKit:
         self.approach_idx = list(range(len(self.names)))
         self.T_palm_approach = np.stack([T_open[i] @ self.T_link_fcl[i] for i in self.approach_idx])
         self._approach_arrays: ObstacleArrays | None = None
+        #: the links a thumb closes against (self-collision): palm and long fingers
+        self.non_thumb = [j for j, n in enumerate(self.names) if not n.startswith("thumb")]
+        self._thumb_templates: dict[int, tuple[ObstacleArrays, ObstacleArrays]] = {}
 
     def approach_arrays(self) -> ObstacleArrays:
         """The approach bodies' shapes as arrays (compiled engine; poses are per call)."""
@@ -106,6 +109,25 @@ class HandKit:
             shapes = [self.shapes[j] for j in self.approach_idx]
             self._approach_arrays = link_arrays(shapes, np.tile(np.eye(4), (len(shapes), 1, 1)))
         return self._approach_arrays
+
+    def thumb_obstacle_arrays(self, obj_arr: ObstacleArrays, T_fcl: np.ndarray) -> ObstacleArrays:
+        """The object's pieces followed by the non-thumb links posed at ``T_fcl`` (13, 4, 4)
+        (their FCL frames): the layout is built once per object, only the poses are new."""
+        hit = self._thumb_templates.get(id(obj_arr))
+        if hit is None or hit[0] is not obj_arr:
+            eye = np.tile(np.eye(4), (len(self.non_thumb), 1, 1))
+            from app.sim.closing_compiled import link_arrays
+
+            shapes = [self.shapes[j] for j in self.non_thumb]
+            hit = (obj_arr, obj_arr.concat(link_arrays(shapes, eye)))
+            if len(self._thumb_templates) >= 16:
+                self._thumb_templates.clear()
+            self._thumb_templates[id(obj_arr)] = hit
+        tpl, n = hit[1], len(obj_arr)
+        R, t = tpl.R.copy(), tpl.t.copy()
+        R[n:] = T_fcl[:, :3, :3]
+        t[n:] = T_fcl[:, :3, 3]
+        return dataclasses.replace(tpl, R=R, t=t)
 
     def link_arrays(self, idx: list[int], T_links: np.ndarray) -> ObstacleArrays:
         """Links ``idx`` posed at ``T_links`` (16, 4, 4) as obstacle arrays (compiled engine)."""
@@ -118,8 +140,23 @@ class HandKit:
         self, obj: GraspTarget, T_links: np.ndarray, idx: list[int], settings: SimulationSettings
     ) -> tuple[ContactSet, int]:
         """Contacts of links ``idx`` posed at ``T_links`` (16, 4, 4) in the object frame, and
-        the FCL queries spent."""
+        the distance queries spent (the compiled engine computes them in one compiled call,
+        ``app.sim.contacts_compiled``, where the object allows)."""
         counter = [0]
+        if settings.closing.engine == "compiled":
+            from app.sim.contacts_compiled import contacts_compiled
+
+            got = contacts_compiled(
+                obj,
+                [self.names[j] for j in idx],
+                [self.shapes[j] for j in idx],
+                T_links[idx],
+                settings.contact,
+                settings.grasp_type.palmar_angle_deg,
+                counter,
+            )
+            if got is not None:
+                return got, counter[0]
         cs = contacts_of_links(
             obj,
             [self.names[j] for j in idx],
@@ -255,18 +292,19 @@ def _thumb_obstacles(
     fingers posed at ``q`` (15,), the base posture."""
     pieces = list(obj.collision_objects())
     T_links = T @ kit.hand.link_poses(q)
-    others = [j for j, n in enumerate(kit.names) if not n.startswith("thumb")]
-    for j in others:
-        kit.static[j].setTransform(fcl_transform(T_links[j] @ kit.T_link_fcl[j]))
+    others = kit.non_thumb
+    T_fcl = np.stack([T_links[j] @ kit.T_link_fcl[j] for j in others])  # (13, 4, 4)
+    obj_arr = _object_arrays(obj, closing)
+    if obj_arr is None:  # the compiled engine reads the arrays only
+        for n, j in enumerate(others):
+            kit.static[j].setTransform(fcl_transform(T_fcl[n]))
     objs = pieces + [kit.static[j] for j in others]
     mask = np.ones((3, len(objs)), bool)
     mask[0, len(pieces)] = False  # the metacarpal sits in the thenar: never against the palm
     spheres = np.full((len(objs), 4), np.inf)
-    for n, j in enumerate(others):
-        spheres[len(pieces) + n, :3] = (T_links[j] @ kit.T_link_fcl[j])[:3, 3]
-        spheres[len(pieces) + n, 3] = kit.reach[j]
-    obj_arr = _object_arrays(obj, closing)
-    arrays = None if obj_arr is None else obj_arr.concat(kit.link_arrays(others, T_links))
+    spheres[len(pieces) :, :3] = T_fcl[:, :3, 3]
+    spheres[len(pieces) :, 3] = kit.reach[others]
+    arrays = None if obj_arr is None else kit.thumb_obstacle_arrays(obj_arr, T_fcl)
     return Obstacles(objs, len(pieces), mask, spheres, arrays)
 
 

@@ -11,7 +11,7 @@ import numpy as np
 import trimesh
 
 from app.errors import UnknownObjectError
-from app.model.objects.shapes import Geometry, Piece, build
+from app.model.objects.shapes import Geometry, Piece, SdfPart, build
 from app.model.objects.spec import OBJECT_KEYS, ObjectSpec, data_dir, read_spec, user_dir
 
 #: Central-difference step (mm) of the numerical SDF gradient.
@@ -113,6 +113,17 @@ class GraspObject:
         """The collision pieces (FCL geometry, pose, hull vertices), ``collision_objects()``
         order."""
         return self._geometry.pieces
+
+    @property
+    def sdf_parts(self) -> tuple[SdfPart, ...] | None:
+        """The signed distance as numbers (``SdfPart``; the compiled contact kernels), or None
+        for an imported mesh."""
+        return self._geometry.sdf_parts
+
+    @property
+    def sdf_bounds(self) -> np.ndarray | None:
+        """(parts, 4) bounding spheres of a union's parts (``Geometry.sdf_bounds``), or None."""
+        return self._geometry.sdf_bounds
 
     @property
     def piece_labels(self) -> tuple[str, ...]:

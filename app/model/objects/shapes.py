@@ -52,6 +52,31 @@ class Piece:
     support function; FCL's Convex does not expose them); None for primitives and meshes."""
 
 
+@dataclass(frozen=True, eq=False)
+class SdfPart:
+    """What one primitive's signed distance computes, as numbers (the compiled contact
+    kernels evaluate the same formula as the ``sdf`` closure: ``app.sim.sdf_compiled``).
+
+    ``kind``: 'revolved' (``table`` of the (rho, z) polygon, local frame posed by ``T``),
+    'annulus' (exact 2-D distance to ``poly`` in (rho, z), object frame), 'box'
+    (``params`` = centre xyz, half extents xyz), 'prism' (``table`` of the section polygon,
+    ``params`` = z centre, half height; local frame posed by ``T``), 'capsule_x'
+    (``params`` = x0, length, y, z, radius)."""
+
+    kind: str
+    """Formula (see the class docstring)."""
+    T: np.ndarray
+    """(4, 4) pose of the local frame in the object frame (identity where unused)."""
+    params: tuple[float, ...] = ()
+    """Scalar parameters of the formula."""
+    table: PolygonSdfTable | None = None
+    """The tabulated 2-D distance ('revolved', 'prism')."""
+    poly: np.ndarray | None = None
+    """(M, 2) polygon of the exact 2-D distance ('annulus')."""
+    real: np.ndarray | None = None
+    """(M,) bool: which edges of ``poly`` count ('annulus')."""
+
+
 @dataclass(frozen=True)
 class Geometry:
     """Mesh, signed distance and collision pieces of one object, object frame, mm."""
@@ -62,6 +87,12 @@ class Geometry:
     """(N, 3) points -> (N,) signed distance, negative inside."""
     pieces: tuple[Piece, ...]
     """Convex pieces whose union is the solid (one BVHModel for imported meshes)."""
+    sdf_parts: tuple[SdfPart, ...] | None = None
+    """The same signed distance as numbers: the minimum over these parts (None: an imported
+    mesh, whose distance only the ``sdf`` closure computes)."""
+    sdf_bounds: np.ndarray | None = None
+    """(len(sdf_parts), 4) bounding sphere (centre, radius) of each part of a union: a part
+    whose ``|p - c| - r`` is not below the best value so far is skipped (None: one part)."""
 
 
 # --------------------------------------------------------------------------- helpers
@@ -159,10 +190,14 @@ class PolygonSdfTable:
         )
         return vals.reshape(self.shape)
 
-    def __call__(self, q: np.ndarray) -> np.ndarray:
+    def grid(self) -> np.ndarray:
+        """The tabulated values (built on first use); ``lo``/``shape`` are set with it."""
         if self._grid is None:
             self._grid = self._build()
-        g = self._grid
+        return self._grid
+
+    def __call__(self, q: np.ndarray) -> np.ndarray:
+        g = self.grid()
         u = (q - self.lo) / self.h
         i = np.floor(u).astype(int)
         inside = (i >= 0).all(1) & (i[:, 0] < self.shape[0] - 1) & (i[:, 1] < self.shape[1] - 1)
@@ -306,7 +341,8 @@ def revolved_profile(
             )
             t_loc = np.zeros(3)
         pieces.append(Piece(geom, R.copy(), R @ t_loc + t, f"{label}[{k}]", verts))
-    return Geometry(mesh, _transform_sdf(sdf_local, T), tuple(pieces))
+    part = SdfPart("revolved", np.array(T, float), table=table)
+    return Geometry(mesh, _transform_sdf(sdf_local, T), tuple(pieces), (part,))
 
 
 def _annulus(r_in: float, r_out: float, height: float, n_wedges: int, label: str) -> Geometry:
@@ -341,7 +377,8 @@ def _annulus(r_in: float, r_out: float, height: float, n_wedges: int, label: str
         )
         geom, hull = _convex_fcl(v)
         pieces.append(Piece(geom, np.eye(3), np.zeros(3), f"{label}[{w}]", hull))
-    return Geometry(mesh, sdf, tuple(pieces))
+    part = SdfPart("annulus", np.eye(4), poly=pts, real=real)
+    return Geometry(mesh, sdf, tuple(pieces), (part,))
 
 
 # ------------------------------------------------------------------ primitives (drill)
@@ -357,7 +394,8 @@ def _box(center: np.ndarray, size: np.ndarray, label: str) -> Geometry:
         return outside + np.minimum(q.max(axis=1), 0.0)
 
     mesh = trimesh.creation.box(extents=2 * half, transform=pose(np.eye(3), c))
-    return Geometry(mesh, sdf, (Piece(fcl.Box(*(2 * half)), np.eye(3), c.copy(), label),))
+    part = SdfPart("box", np.eye(4), (*map(float, c), *map(float, half)))
+    return Geometry(mesh, sdf, (Piece(fcl.Box(*(2 * half)), np.eye(3), c.copy(), label),), (part,))
 
 
 def rounded_rect(width_x: float, width_y: float, corner_r: float, n_corner: int) -> np.ndarray:
@@ -398,7 +436,8 @@ def _prism(poly: np.ndarray, z0: float, z1: float, T: np.ndarray, label: str) ->
     mesh.apply_transform(T)
     geom, hull = _convex_fcl(v)
     piece = Piece(geom, T[:3, :3].copy(), T[:3, 3].copy(), label, hull)
-    return Geometry(mesh, _transform_sdf(sdf_local, T), (piece,))
+    part = SdfPart("prism", np.array(T, float), (zc, hz), table=table)
+    return Geometry(mesh, _transform_sdf(sdf_local, T), (piece,), (part,))
 
 
 def _capsule_x(x0: float, x1: float, radius: float, y: float, z: float, label: str) -> Geometry:
@@ -426,7 +465,8 @@ def _capsule_x(x0: float, x1: float, radius: float, y: float, z: float, label: s
 
     center = np.array([0.5 * (x0 + x1), y, z])
     piece = Piece(fcl.Capsule(radius, length), R_Z_TO_X.copy(), center, label)
-    return Geometry(rev.mesh, sdf, (piece,))
+    part = SdfPart("capsule_x", np.eye(4), (x0, length, y, z, radius))
+    return Geometry(rev.mesh, sdf, (piece,), (part,))
 
 
 def union(parts: list[Geometry]) -> Geometry:
@@ -457,7 +497,14 @@ def union(parts: list[Geometry]) -> Geometry:
                 best[need] = np.minimum(best[need], fns[j](p[need]))
         return best
 
-    return Geometry(mesh, sdf, tuple(pc for g in parts for pc in g.pieces))
+    sdf_parts: tuple[SdfPart, ...] | None = None
+    bounds: np.ndarray | None = None
+    if all(g.sdf_parts is not None and len(g.sdf_parts) == 1 and g.sdf_bounds is None
+           for g in parts):  # fmt: skip
+        sdf_parts = tuple(sp for g in parts for sp in (g.sdf_parts or ()))
+        bounds = np.column_stack([centres, radii])
+    pieces = tuple(pc for g in parts for pc in g.pieces)
+    return Geometry(mesh, sdf, pieces, sdf_parts, bounds)
 
 
 # ------------------------------------------------------------------ object builders

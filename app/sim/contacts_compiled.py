@@ -1,0 +1,357 @@
+"""Contact patches of the compiled engine: ``app.sim.contacts.contacts_of_links`` in one
+numba call per set of links.
+
+Per link, the same steps as the numpy path: the bounding-sphere cull, the link's distance to
+the object's convex pieces (exact GJK, ``app.sim.gjk``, in place of FCL: the pieces the
+compiled closing engine stopped against), the exact coarse-to-fine screening of the link's
+surface samples, the samples within tol (or the nearest one), farthest-point thinning in the
+link frame, the object's normal by central differences and the palmar test; the signed
+distance is ``app.sim.sdf_compiled`` (equal to the numpy closures to rounding). Objects
+without a compiled signed distance or without piece arrays (imported meshes) return None and
+the caller uses the numpy path.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from app.model.contact_set import ContactSet
+from app.model.hand.geometry import Shape
+from app.model.objects.model import NORMAL_STEP_MM
+from app.sim import gjk
+from app.sim.closing_compiled import link_arrays, object_arrays
+from app.sim.contacts import (
+    FPS_TIE_MM2,
+    SDF_LIPSCHITZ,
+    ContactSettings,
+    _coarse,
+    _reach,
+    _samples,
+)
+from app.sim.sdf_compiled import SdfProgram, object_program, sdf_point
+
+LinkTables = tuple[
+    np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+    np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+]  # fmt: skip
+
+#: Cell size (mm) of the super-coarse samples that screen the coarse ones.
+SUPER_CELL_MM = 12.0
+
+
+def _piece_spheres(arr: Any) -> np.ndarray:
+    """(P, 4) a bounding sphere (centre, radius) of each piece, object frame."""
+    out = np.zeros((len(arr), 4))
+    for p in range(len(arr)):
+        v = arr.verts[arr.vstart[p] : arr.vstart[p + 1]]
+        if len(v):
+            c = 0.5 * (v.min(0) + v.max(0))
+            r = float(np.linalg.norm(v - c, axis=1).max())
+        else:
+            c = np.zeros(3)
+            typ, prm = arr.typ[p], arr.prm[p]
+            if typ == gjk.BOX:
+                r = float(np.linalg.norm(prm))
+            elif typ == gjk.CYLINDER:
+                r = float(np.hypot(prm[0], prm[1]))
+            else:  # capsule, sphere
+                r = float(prm[0] + prm[1])
+        out[p, :3] = arr.R[p] @ c + arr.t[p]
+        out[p, 3] = r + 1e-6
+    return out
+
+
+_SPHERES: dict[int, tuple[Any, np.ndarray]] = {}
+
+
+def piece_spheres(arr: Any) -> np.ndarray:
+    """``_piece_spheres`` cached per arrays object."""
+    hit = _SPHERES.get(id(arr))
+    if hit is not None and hit[0] is arr:
+        return hit[1]
+    if len(_SPHERES) >= 64:
+        _SPHERES.clear()
+    out = _piece_spheres(arr)
+    _SPHERES[id(arr)] = (arr, out)
+    return out
+
+
+@lru_cache(maxsize=256)
+def link_tables(shapes: tuple[Shape, ...], spacing: float) -> LinkTables:
+    """The links' shapes, samples and coarse screening as flat arrays, ``contacts_kernel``'s
+    order: (T_link_fcl (L, 4, 4), type (L,), prm (L, 3), reach (L,), samples (S, 3) link
+    frames, sample offsets (L + 1,), coarse indices (C,) local to their link, coarse offsets
+    (L + 1,), assignment (S,) local to the link's coarse samples, each sample's distance to
+    its coarse sample (S,), the super-coarse sample of each coarse sample (C,) (local
+    coarse index; super-coarse samples are coarse samples, one per ``SUPER_CELL_MM`` cell,
+    assigned to themselves), the coarse sample's distance to it (C,), the largest distance
+    of a sample to its coarse sample (C,))."""
+    la = link_arrays(list(shapes), np.tile(np.eye(4), (len(shapes), 1, 1)))
+    T_fcl = np.stack([s.T_link_fcl() for s in shapes])
+    reach = np.array([_reach(s) for s in shapes])
+    from scipy.spatial import cKDTree
+
+    samp, soff, cidx, coff, assign, dist = [], [0], [], [0], [], []
+    sup, dcs, cmax = [], [], []
+    for s in shapes:
+        p, _ = _samples(s, spacing)
+        idx_c, asg, _ = _coarse(s, spacing)
+        samp.append(p)
+        soff.append(soff[-1] + len(p))
+        cidx.append(idx_c)
+        coff.append(coff[-1] + len(idx_c))
+        assign.append(asg)
+        dist.append(np.linalg.norm(p - p[idx_c][asg], axis=1))
+        pc = p[idx_c]
+        cell = np.floor(pc / SUPER_CELL_MM).astype(np.int64)
+        _, first = np.unique(cell, axis=0, return_index=True)
+        first = np.sort(first)
+        d_s, a_s = cKDTree(pc[first]).query(pc)
+        a_s = first[np.asarray(a_s)]
+        a_s[first] = first  # a super-coarse sample screens itself (ties in the tree)
+        sup.append(a_s.astype(np.int64))
+        dcs.append(np.linalg.norm(pc - pc[a_s], axis=1))
+        cm = np.zeros(len(idx_c))
+        np.maximum.at(cm, asg, dist[-1])
+        cmax.append(cm)
+    return (
+        np.ascontiguousarray(T_fcl), la.typ, la.prm, reach,
+        np.ascontiguousarray(np.concatenate(samp)), np.array(soff, np.int64),
+        np.concatenate(cidx).astype(np.int64), np.array(coff, np.int64),
+        np.concatenate(assign).astype(np.int64), np.concatenate(dist),
+        np.concatenate(sup), np.concatenate(dcs), np.concatenate(cmax),
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def _argmax_tie(d: np.ndarray, n: int, tie: float) -> int:
+    """First index of ``d[:n]`` within ``tie`` of its maximum (``contacts._argmax_tie``)."""
+    m = -np.inf
+    for i in range(n):
+        if d[i] > m:
+            m = d[i]
+    for i in range(n):
+        if d[i] >= m - tie:
+            return i
+    return 0
+
+
+@njit(cache=True)
+def contacts_kernel(
+    T_links: np.ndarray,
+    T_fcl: np.ndarray,
+    ltyp: np.ndarray,
+    lprm: np.ndarray,
+    reach: np.ndarray,
+    samp: np.ndarray,
+    soff: np.ndarray,
+    cidx: np.ndarray,
+    coff: np.ndarray,
+    assign: np.ndarray,
+    sdist: np.ndarray,
+    sup: np.ndarray,
+    dcs: np.ndarray,
+    cmax: np.ndarray,
+    otyp: np.ndarray,
+    oprm: np.ndarray,
+    oR: np.ndarray,
+    ot: np.ndarray,
+    vstart: np.ndarray,
+    verts: np.ndarray,
+    ospheres: np.ndarray,
+    centroid: np.ndarray,
+    r_obj: float,
+    prog: SdfProgram,
+    tol: float,
+    max_pts: int,
+    cos_lim: float,
+    lip: float,
+    h: float,
+    tie: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, int]:
+    """Contacts of links posed at ``T_links`` (L, 4, 4): (points (n, 3), contact normals
+    (n, 3), link of each (n,), palmar (n,), n, distance queries) in rows ``[:n]``.
+
+    Screening as the numpy path's, exact, with per-sample bounds: a sample at distance
+    ``sdist`` from its coarse sample has a signed distance >= the coarse value - L·sdist (L
+    the Lipschitz bound), so only samples whose bound is <= max(tol, the smallest coarse
+    value) are evaluated; pieces whose bounding sphere is farther than tol are not queried."""
+    L = len(T_links)
+    P = np.empty((L * max_pts, 3))
+    N = np.empty((L * max_pts, 3))
+    link = np.empty(L * max_pts, np.int64)
+    pal = np.empty(L * max_pts, np.bool_)
+    n_out = 0
+    queries = 0
+    n_obs = len(otyp)
+    for l in range(L):  # noqa: E741
+        T = T_links[l]
+        Tb = T @ T_fcl[l]
+        cx, cy, cz = Tb[0, 3] - centroid[0], Tb[1, 3] - centroid[1], Tb[2, 3] - centroid[2]
+        if math.sqrt(cx * cx + cy * cy + cz * cz) > r_obj + reach[l] + tol:
+            continue
+        best = np.inf
+        for p in range(n_obs):
+            ex, ey, ez = (
+                Tb[0, 3] - ospheres[p, 0],
+                Tb[1, 3] - ospheres[p, 1],
+                Tb[2, 3] - ospheres[p, 2],
+            )
+            if math.sqrt(ex * ex + ey * ey + ez * ez) - reach[l] - ospheres[p, 3] > tol:
+                continue
+            d = gjk.shape_distance(
+                ltyp[l], lprm[l], Tb[:3, :3], Tb[:3, 3],
+                otyp[p], oprm[p], oR[p], ot[p], verts, 0, 0, vstart[p], vstart[p + 1],
+            )  # fmt: skip
+            queries += 1
+            if d < best:
+                best = d
+        if best > tol:
+            continue
+        # coarse samples, then the samples whose coarse sample may be within tol
+        c0, c1 = coff[l], coff[l + 1]
+        s0, s1 = soff[l], soff[l + 1]
+        # (super-coarse samples first: a coarse sample whose bound from its super-coarse
+        # sample keeps all its samples above tol gets that bound instead of its value)
+        sd_c = np.empty(c1 - c0)
+        exact = np.zeros(c1 - c0, np.bool_)
+        for sweep in range(3):
+            for c in range(c0, c1):
+                if exact[c - c0]:
+                    continue
+                if sweep == 0 and sup[c] != c - c0:
+                    continue
+                if sweep == 1:
+                    lb = sd_c[sup[c]] - lip * dcs[c]
+                    if lb - lip * cmax[c] > tol:
+                        sd_c[c - c0] = lb
+                        continue
+                k = s0 + cidx[c]
+                x = T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2]
+                y = T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2]
+                z = T[2, 0] * samp[k, 0] + T[2, 1] * samp[k, 1] + T[2, 2] * samp[k, 2]
+                sd_c[c - c0] = sdf_point(x + T[0, 3], y + T[1, 3], z + T[2, 3], prog)
+                exact[c - c0] = True
+            if sweep == 1:
+                m_min = np.inf
+                for c in range(c1 - c0):
+                    if exact[c] and sd_c[c] < m_min:
+                        m_min = sd_c[c]
+                if m_min <= tol:
+                    break  # else (a grazing contact): every coarse value, for the nearest
+        m_min = np.inf
+        for c in range(c1 - c0):
+            if exact[c] and sd_c[c] < m_min:
+                m_min = sd_c[c]
+        bound = max(tol, m_min)
+        sel = np.empty(s1 - s0, np.int64)
+        n_sel = 0
+        near, near_v = -1, np.inf
+        for k in range(s0, s1):
+            if sd_c[assign[k]] - lip * sdist[k] > bound:
+                continue
+            x = T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2] + T[0, 3]
+            y = T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2] + T[1, 3]
+            z = T[2, 0] * samp[k, 0] + T[2, 1] * samp[k, 1] + T[2, 2] * samp[k, 2] + T[2, 3]
+            v = sdf_point(x, y, z, prog)
+            if v <= tol:
+                sel[n_sel] = k
+                n_sel += 1
+            if v < near_v:
+                near, near_v = k, v
+        if n_sel == 0:
+            sel[0] = near
+            n_sel = 1
+        # farthest-point thinning in the link frame
+        chosen = np.empty(min(n_sel, max_pts), np.int64)
+        if n_sel <= max_pts:
+            for i in range(n_sel):
+                chosen[i] = sel[i]
+        else:
+            mx, my, mz = 0.0, 0.0, 0.0
+            for i in range(n_sel):
+                mx += samp[sel[i], 0]
+                my += samp[sel[i], 1]
+                mz += samp[sel[i], 2]
+            mx, my, mz = mx / n_sel, my / n_sel, mz / n_sel
+            d = np.empty(n_sel)
+            for i in range(n_sel):
+                a = samp[sel[i]]
+                d[i] = (a[0] - mx) ** 2 + (a[1] - my) ** 2 + (a[2] - mz) ** 2
+            j = _argmax_tie(d, n_sel, tie)
+            chosen[0] = sel[j]
+            b = samp[sel[j]]
+            for i in range(n_sel):
+                a = samp[sel[i]]
+                d[i] = (a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 + (a[2] - b[2]) ** 2
+            for m in range(1, max_pts):
+                j = _argmax_tie(d, n_sel, tie)
+                chosen[m] = sel[j]
+                b = samp[sel[j]]
+                for i in range(n_sel):
+                    a = samp[sel[i]]
+                    e = (a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 + (a[2] - b[2]) ** 2
+                    if e < d[i]:
+                        d[i] = e
+        for k in chosen:
+            q = np.empty(3)
+            for r in range(3):
+                q[r] = T[r, 0] * samp[k, 0] + T[r, 1] * samp[k, 1] + T[r, 2] * samp[k, 2]
+                q[r] += T[r, 3]
+            g = np.empty(3)
+            for r in range(3):
+                q[r] += h
+                fp = sdf_point(q[0], q[1], q[2], prog)
+                q[r] -= h
+                q[r] -= h
+                fm = sdf_point(q[0], q[1], q[2], prog)
+                q[r] += h
+                g[r] = (fp - fm) / (2 * h)
+            nrm = math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
+            if nrm <= 1e-12:
+                nrm = 1.0
+            for r in range(3):
+                P[n_out, r] = q[r]
+                N[n_out, r] = -(g[r] / nrm)
+            link[n_out] = l
+            c = N[n_out, 0] * T[0, 2] + N[n_out, 1] * T[1, 2] + N[n_out, 2] * T[2, 2]
+            pal[n_out] = c > cos_lim
+            n_out += 1
+    return P, N, link, pal, n_out, queries
+
+
+def contacts_compiled(
+    obj: Any,
+    names: list[str],
+    shapes: list[Shape],
+    T_object_links: np.ndarray,
+    settings: ContactSettings,
+    palmar_angle_deg: float,
+    counter: list[int] | None = None,
+) -> ContactSet | None:
+    """``contacts_of_links`` on the compiled path, or None when the object has no compiled
+    signed distance or piece arrays (the caller then uses the numpy path)."""
+    prog = object_program(obj)
+    arr = object_arrays(obj)
+    if prog is None or arr is None:
+        return None
+    tables = link_tables(tuple(shapes), float(settings.sample_spacing_mm))
+    P, N, link, pal, n, queries = contacts_kernel(
+        np.ascontiguousarray(T_object_links, float), *tables,
+        arr.typ, arr.prm, arr.R, arr.t, arr.vstart, arr.verts, piece_spheres(arr),
+        np.asarray(obj.centroid_object, float), float(obj.max_radius), prog,
+        float(settings.contact_tol_mm), int(settings.max_points_per_link),
+        float(np.cos(np.deg2rad(palmar_angle_deg))), SDF_LIPSCHITZ, NORMAL_STEP_MM,
+        FPS_TIE_MM2,
+    )  # fmt: skip
+    if counter is not None:
+        counter[0] += int(queries)
+    if n == 0:
+        return ContactSet()
+    names_arr = np.array(names, dtype=object)
+    return ContactSet(P[:n].copy(), N[:n].copy(), names_arr[link[:n]], pal[:n].copy())
