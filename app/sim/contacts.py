@@ -14,6 +14,7 @@ the object. Palmar: angle(n_contact, link n_palmar) < threshold.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -169,8 +170,12 @@ def contacts_of_links(
     settings: ContactSettings,
     palmar_angle_deg: float,
     counter: list[int] | None = None,
+    link_distance: Callable[[Shape, np.ndarray], float] | None = None,
 ) -> ContactSet:
-    """Contacts of the given links (poses (L, 4, 4) in the object frame) with the object."""
+    """Contacts of the given links (poses (L, 4, 4) in the object frame) with the object.
+
+    ``link_distance(shape, T_object_fcl)``: the in-contact test's distance (exact at least up
+    to the tolerance) in place of FCL's (the compiled engine on an imported mesh)."""
     pieces = obj.collision_objects()
     centroid = obj.centroid_object
     r_obj = obj.max_radius
@@ -183,12 +188,17 @@ def contacts_of_links(
         reach = _reach(shape)
         if np.linalg.norm(Tb[:3, 3] - centroid) > r_obj + reach + settings.contact_tol_mm:
             continue
-        body.setTransform(fcl_transform(Tb))
-        best = np.inf
-        for piece in pieces:
-            best = min(best, pair_distance(body, piece))
+        if link_distance is not None:
+            best = link_distance(shape, Tb)
             if counter is not None:
                 counter[0] += 1
+        else:
+            body.setTransform(fcl_transform(Tb))
+            best = np.inf
+            for piece in pieces:
+                best = min(best, pair_distance(body, piece))
+                if counter is not None:
+                    counter[0] += 1
         if best > settings.contact_tol_mm:
             continue
         p, n = link_patch(obj, shape, T, settings)

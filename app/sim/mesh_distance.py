@@ -244,3 +244,18 @@ def mesh_distance(
                                                      tri_c, tri_r, stamp, qid, margin, best,
                                                      tverts)  # fmt: skip
     return best
+
+
+def link_mesh_distance(shape: object, T_object_fcl: np.ndarray, pk: MeshPack, tol: float) -> float:
+    """A hand link's (``CapsuleShape`` or ``BoxShape`` posed at its FCL frame) distance to the
+    mesh: exact when it may be <= ``tol`` (the contact test), else a lower bound above it."""
+    from app.model.hand.geometry import BoxShape, CapsuleShape
+
+    R = np.ascontiguousarray(T_object_fcl[:3, :3], dtype=float)
+    t = np.ascontiguousarray(T_object_fcl[:3, 3], dtype=float)
+    if isinstance(shape, CapsuleShape):
+        prm = np.array([shape.radius, 0.5 * shape.length, 0.0])
+        return float(mesh_distance(gjk.CAPSULE, prm, R, t, pk, tol))
+    assert isinstance(shape, BoxShape), type(shape)
+    half = 0.5 * (np.asarray(shape.hi_link, float) - np.asarray(shape.lo_link, float))
+    return float(mesh_distance(gjk.BOX, np.ascontiguousarray(half), R, t, pk, tol))

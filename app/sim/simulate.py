@@ -14,7 +14,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import fcl
 import numpy as np
@@ -157,6 +157,15 @@ class HandKit:
             )
             if got is not None:
                 return got, counter[0]
+        link_distance = None
+        if settings.closing.engine == "compiled":
+            pack_of = getattr(obj, "mesh_pack", None)
+            pack: Any = pack_of() if callable(pack_of) else None
+            if pack is not None:  # an imported mesh: its distance field, not FCL's BVH
+                from app.sim.mesh_distance import link_mesh_distance
+
+                tol = settings.contact.contact_tol_mm
+                link_distance = lambda sh, T: link_mesh_distance(sh, T, pack, tol)  # noqa: E731
         cs = contacts_of_links(
             obj,
             [self.names[j] for j in idx],
@@ -167,6 +176,7 @@ class HandKit:
             settings.contact,
             settings.grasp_type.palmar_angle_deg,
             counter,
+            link_distance,
         )
         return cs, counter[0]
 
