@@ -46,6 +46,8 @@ def _decimated(key: str, faces: int) -> str:
     from app.model.objects.shapes import from_mesh
 
     obj = load_object(key)
+    if len(obj.mesh.faces) <= faces:
+        return ""
     m = obj.mesh.simplify_quadric_decimation(face_count=faces)
     if not m.is_watertight:
         return ""
@@ -92,7 +94,7 @@ def main() -> None:
             if dec:
                 keys.append(dec)
             else:
-                print(f"({scan}: its {a.decimate}-face simplification is not watertight)")
+                print(f"({scan}: no watertight {a.decimate}-face simplification)")
         ref = None
         for k in keys:
             dt, _ = time_object(k, design, s, a.stride)

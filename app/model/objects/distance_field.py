@@ -18,8 +18,8 @@ How it is built (``build_field``):
   that errs by at most ``h·√3/2``; between nodes the interpolation adds up to about h/4
   (the tests bound the far error by 1.25 h). Only the contact screening reads these values,
   with a margin of several mm.
-- **Outside the grid** (padded by ``EXACT_WITHIN_MM`` and two cells, so every point within
-  8 mm of the surface is inside it), the distance to the mesh's bounding box, a lower bound.
+- **Outside the grid** (padded by ``PAD_MM`` = 25 mm and two cells, so every point within
+  25 mm of the surface is inside it), the distance to the mesh's bounding box, a lower bound.
 
 Queries (``DistanceField.__call__``): the smallest ``|node value| + node distance`` over the
 8 nodes around a point (a far node's value raised by its error bound ``h·√3/2``) bounds the
@@ -56,13 +56,16 @@ from numba import njit
 MeshPack = tuple[Any, ...]
 
 #: Bump when the field's construction changes (old cached files are then ignored).
-FIELD_VERSION = 2
+FIELD_VERSION = 4
 #: Default grid spacing (mm): the contact tolerance is 1 mm.
 SPACING_MM = 1.0
 #: Default exact band (mm): the contact screening looks up to tol + 1.5·δ ≈ 5.5 mm.
 BAND_MM = 6.0
 #: Queries are answered exactly (nearest triangle) up to this distance from the surface.
 EXACT_WITHIN_MM = 8.0
+#: The grid extends this far beyond the mesh's box (mm): a hand link near the object has its
+#: axis points inside it, where the nodes bound distances tightly (outside: the box's bounds).
+PAD_MM = 25.0
 #: Largest grid (nodes); larger objects get a coarser spacing (600 mm → ~3 mm).
 MAX_NODES = 12_000_000
 
@@ -354,13 +357,52 @@ def _query(pk: MeshPack, p: np.ndarray, out: np.ndarray) -> None:
         out[k] = point_sdf(pk, p[k, 0], p[k, 1], p[k, 2])
 
 
+@njit(cache=True, inline="always")
+def _tri_box_overlap(
+    c: np.ndarray, half: float, a: np.ndarray, b: np.ndarray, d: np.ndarray
+) -> bool:
+    """Whether triangle (a, b, d) meets the cube of centre c and half edge ``half``: the
+    separating-axis test on the cube's 3 axes, the triangle's normal and the 9 edge-axis
+    cross products (Akenine-Möller)."""
+    v0 = a - c
+    v1 = b - c
+    v2 = d - c
+    for ax in range(3):
+        if min(v0[ax], v1[ax], v2[ax]) > half or max(v0[ax], v1[ax], v2[ax]) < -half:
+            return False
+    e0 = v1 - v0
+    e1 = v2 - v1
+    e2 = v0 - v2
+    n = np.cross(e0, e1)
+    r = half * (abs(n[0]) + abs(n[1]) + abs(n[2]))
+    if abs(n @ v0) > r:
+        return False
+    for e in (e0, e1, e2):
+        for ax in range(3):
+            # axis = unit_ax × e
+            u = np.zeros(3)
+            if ax == 0:
+                u[1], u[2] = -e[2], e[1]
+            elif ax == 1:
+                u[0], u[2] = e[2], -e[0]
+            else:
+                u[0], u[1] = -e[1], e[0]
+            p0, p1, p2 = u @ v0, u @ v1, u @ v2
+            rr = half * (abs(u[0]) + abs(u[1]) + abs(u[2]))
+            if min(p0, p1, p2) > rr or max(p0, p1, p2) < -rr:
+                return False
+    return True
+
+
 @njit(cache=True)
 def _bucket_kernel(
     V: np.ndarray, F: np.ndarray, b_origin: np.ndarray, b_size: float, b_shape: np.ndarray,
     fill: bool, count: np.ndarray, b_start: np.ndarray, b_ids: np.ndarray,
 ) -> None:  # fmt: skip
-    """Count (fill=False) or list (fill=True) the triangles of every bucket their box meets."""
+    """Count (fill=False) or list (fill=True) the triangles of every bucket they meet (a long
+    sliver is listed only where it passes, not in its whole bounding box)."""
     nby, nbz = b_shape[1], b_shape[2]
+    centre = np.empty(3)
     lo_b = np.empty(3, np.int64)
     hi_b = np.empty(3, np.int64)
     for f in range(F.shape[0]):
@@ -369,9 +411,19 @@ def _bucket_kernel(
             hi = max(V[F[f, 0], a], V[F[f, 1], a], V[F[f, 2], a])
             lo_b[a] = max(int(math.floor((lo - b_origin[a]) / b_size)), 0)
             hi_b[a] = min(int(math.floor((hi - b_origin[a]) / b_size)), b_shape[a] - 1)
+        a_, b_, c_ = V[F[f, 0]], V[F[f, 1]], V[F[f, 2]]
+        n_box = (hi_b[0] - lo_b[0] + 1) * (hi_b[1] - lo_b[1] + 1) * (hi_b[2] - lo_b[2] + 1)
+        exact = n_box > 8  # a large triangle: only the buckets it passes through
         for bi in range(lo_b[0], hi_b[0] + 1):
             for bj in range(lo_b[1], hi_b[1] + 1):
                 for bk in range(lo_b[2], hi_b[2] + 1):
+                    centre[0] = b_origin[0] + (bi + 0.5) * b_size
+                    centre[1] = b_origin[1] + (bj + 0.5) * b_size
+                    centre[2] = b_origin[2] + (bk + 0.5) * b_size
+                    if exact and not _tri_box_overlap(
+                        centre, 0.5 * b_size * (1 + 1e-6), a_, b_, c_
+                    ):
+                        continue
                     b = (bi * nby + bj) * nbz + bk
                     if fill:
                         b_ids[b_start[b] + count[b]] = f
@@ -524,7 +576,7 @@ def _pseudo_normals(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
 def spacing_for(mesh: trimesh.Trimesh, spacing_mm: float = SPACING_MM, band_mm: float = BAND_MM
                 ) -> float:  # fmt: skip
     """The grid spacing: ``spacing_mm``, or coarser so that the grid stays under MAX_NODES."""
-    pad = max(band_mm, EXACT_WITHIN_MM) + 2 * spacing_mm
+    pad = max(band_mm, PAD_MM) + 2 * spacing_mm
     ext = np.asarray(mesh.extents, dtype=float) + 2 * pad
     h = spacing_mm
     while float(np.prod(np.ceil(ext / h) + 1)) > MAX_NODES:
@@ -543,7 +595,7 @@ def build_field(
     band = max(band_mm, 2 * h)
     lo = np.asarray(mesh.bounds[0], dtype=float)
     hi = np.asarray(mesh.bounds[1], dtype=float)
-    pad = max(band, EXACT_WITHIN_MM) + 2 * h  # every point within 8 mm is in the grid
+    pad = max(band, PAD_MM) + 2 * h  # links near the object have their bounds in the grid
     origin = lo - pad
     shape = tuple(int(x) for x in np.ceil((hi + pad - origin) / h) + 1)
     m = mesh_arrays(mesh)
