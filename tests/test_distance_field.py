@@ -53,7 +53,7 @@ def test_sign_everywhere_and_far_values_close(case: tuple[str, trimesh.Trimesh, 
     the surface the value is exact, farther within about h of the true distance."""
     _, m, f = case
     rng = np.random.default_rng(2)
-    q = rng.uniform(m.bounds[0] - 25.0, m.bounds[1] + 25.0, size=(2500, 3))
+    q = rng.uniform(m.bounds[0] - 35.0, m.bounds[1] + 35.0, size=(2500, 3))
     exact = mesh_sdf(m)(q)
     got = f(q)  # type: ignore[operator]
     clear = np.abs(exact) > 1e-6
@@ -66,7 +66,7 @@ def test_sign_everywhere_and_far_values_close(case: tuple[str, trimesh.Trimesh, 
     assert np.abs(got - exact)[in_grid].max() <= 1.25 * h  # h·√3/2 plus interpolation
     # within EXACT_WITHIN_MM of the surface (less the bound's slack) the answer is exact
     close = in_grid & (np.abs(exact) < EXACT_WITHIN_MM - 2 * h)
-    assert close.sum() > 0.15 * in_grid.sum()
+    assert close.sum() > 50
     np.testing.assert_allclose(got[close], exact[close], atol=1e-9)
     # outside the grid: the distance to the mesh's box, a lower bound beyond the band
     out = ~in_grid

@@ -164,8 +164,9 @@ def test_import_box_in_metres(tmp_path: Path) -> None:
         assert abs(o.sdf(o.spec.target_object[None])[0]) < 1e-6
         # object frame: base centre at the origin, +z up (the box spans z 0..30); the mesh's
         # distance field is exact within 8 mm of the surface, within ~h (1 mm) deeper
-        assert o.sdf(np.array([[0.0, 0.0, 4.0], [0.0, 0.0, 55.0]])) == pytest.approx([-4.0, 25.0])
-        assert o.sdf(np.array([[0.0, 0.0, 15.0]]))[0] == pytest.approx(-15.0, abs=1.25)
+        assert o.sdf(np.array([[0.0, 0.0, 4.0], [0.0, 0.0, 36.0]])) == pytest.approx([-4.0, 6.0])
+        far = o.sdf(np.array([[0.0, 0.0, 15.0], [0.0, 0.0, 55.0]]))
+        assert far == pytest.approx([-15.0, 25.0], abs=1.25)
         n = o.normal(o.spec.target_object[None])[0]
         assert n @ o.spec.normal_object > 0.99
         assert len(o.collision_objects()) == 1
