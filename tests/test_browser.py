@@ -308,3 +308,58 @@ def test_eight_tabs_opened_at_once_apply_their_links(server: ExplorerServer) -> 
         assert [s.link_error for s in sessions] == [None] * 8
         for page in pages:
             page.close()
+
+
+def screen_point(camera: Any, p: Any, box: dict[str, float]) -> tuple[float, float]:
+    """Page pixel (x, y) of world point ``p`` (m) seen by viser's ``camera`` on the canvas
+    ``box`` (a pinhole camera: vertical field of view ``fov``, ``aspect`` width/height)."""
+    pos, look = np.asarray(camera.position, float), np.asarray(camera.look_at, float)
+    f = (look - pos) / np.linalg.norm(look - pos)
+    r = np.cross(f, np.asarray(camera.up_direction, float))
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    v = np.asarray(p, float) - pos
+    t = np.tan(float(camera.fov) / 2)
+    nx = float(v @ r) / (float(v @ f) * t * float(camera.aspect))
+    ny = float(v @ u) / (float(v @ f) * t)
+    return box["x"] + (nx + 1) / 2 * box["width"], box["y"] + (1 - ny) / 2 * box["height"]
+
+
+def test_click_on_scene_map_selects_design(server: ExplorerServer, browser: Any) -> None:
+    page, s = open_tab(server, browser, "?cmc=0&mcp=45")
+    try:
+        sm = s.map_panel.scene_map
+        assert sm is not None and not sm.visible  # hidden in the hand's views
+        page.get_by_role("tab", name="Map").click()
+        page.get_by_role("button", name="Pick a design on the map (3-D view)").click()
+        wait_until(lambda: sm.visible and sm.shown_at > 0, 15, "the in-scene map")
+        assert s.view_dd.value == "design map"
+        wait_until(lambda: (30.0, 75.0) in [(p.cmc_deg, p.mcp_deg) for p in s.map_panel.points],
+                   15, "the map's designs")  # fmt: skip
+        wait_drawn(page, s.client, 30)
+        page.wait_for_timeout(300)  # the camera's move has reached the page
+        base = s.map_panel._scene_base  # noqa: SLF001
+        assert base is not None
+        target = sm.placement.world_of_pixel(*base.pixel(30.0, 75.0), base.size)
+        box = page.locator("canvas").first.bounding_box()
+        x, y = screen_point(s.client.camera, target, box)
+        assert 0 < x < 1280 * 0.66 and 0 < y < 800  # left of the control panel
+        before = s.map_panel.star_time
+        page.mouse.click(x + 4, y - 3)  # a few px off the point still picks it
+        t0 = time.monotonic()
+        wait_until(lambda: s.map_panel.star_at == (30.0, 75.0), 10, "the star on the new design")
+        t_star = time.monotonic() - t0
+        assert sm.picks == [(30.0, 75.0)]
+        assert s.map_panel.star_time > before and t_star < 0.5
+        wait_until(lambda: (s.design.cmc_deg, s.design.mcp_deg) == (30.0, 75.0), 10, "design")
+        assert (s.design_panel.cmc.value, s.design_panel.mcp.value) == (30.0, 75.0)
+        page.get_by_role("tab", name="Design").click()  # the page's sliders moved too
+        assert number_box(page, "CMC (°)").input_value() == "30"
+        assert number_box(page, "MCP (°)").input_value() == "75"
+        # a click off the designs (on the title) selects nothing
+        title = sm.placement.world_of_pixel(base.size[0] / 2, 12 * base.scale, base.size)
+        page.mouse.click(*screen_point(s.client.camera, title, box))
+        page.wait_for_timeout(500)
+        assert sm.picks == [(30.0, 75.0)]
+    finally:
+        page.close()

@@ -27,7 +27,7 @@ from app.explorer.panel_share import SharePanel, request_share_url
 from app.explorer.scene_hand import HandView
 from app.explorer.scene_object import ObjectView
 from app.explorer.units import MM
-from app.explorer.views import DEFAULT_VIEW, VIEWS, camera_pose
+from app.explorer.views import DEFAULT_VIEW, MAP, VIEWS, camera_pose, map_camera_pose
 from app.model.design import BASELINE, ThumbDesign
 from app.model.hand.model import Hand, build_hand
 from app.model.objects import available_keys, load_object
@@ -167,8 +167,9 @@ class Session:
             )
         with tabs.add_tab("Map", viser.Icon.MAP):
             self.map_panel = MapPanel(
-                gui, self.ctx.store, self.ctx.objects, self._map_select, self.ctx.reference_dir
-            )
+                gui, self.ctx.store, self.ctx.objects, self._map_select, self.ctx.reference_dir,
+                scene=self.client.scene, on_show_scene=self._show_scene_map,
+            )  # fmt: skip
         with tabs.add_tab("Share", viser.Icon.SHARE):
             self.share_panel = SharePanel(
                 gui,
@@ -339,7 +340,14 @@ class Session:
         self.on_object(key)
 
     def _map_select(self, cmc_deg: float, mcp_deg: float) -> None:
+        """'Go to design' and clicks on the in-scene map: one path."""
         self.design_panel.set_design(cmc_deg, mcp_deg)
+
+    def _show_scene_map(self) -> None:
+        if self.view_dd.value != MAP:
+            self.view_dd.value = MAP  # its on_update frames the camera
+        else:
+            self.frame_camera()
 
     # ------------------------------------------------------------------ grasp
     def _show_final(self) -> None:
@@ -458,15 +466,24 @@ class Session:
     def frame_camera(self) -> None:
         """Point the camera as the View dropdown says (views.py: from the palmar-radial
         side, so the thumb and its opposition are in sight)."""
-        hv = self.hand_view
-        pose = camera_pose(
-            self.view_dd.value, hv.T_object_palm, hv.points_mm("thumb"), hv.points_mm(),
-            self.obj.mesh.bounds,
-        )  # fmt: skip
+        view = self.view_dd.value
+        self.map_panel.set_scene_visible(view == MAP)
         cam = self.client.camera
+        if view == MAP:
+            sm = self.map_panel.scene_map
+            assert sm is not None
+            pose = map_camera_pose(sm.placement, float(cam.fov), float(cam.aspect))
+            scale = 1.0  # the map's pose is in metres already
+        else:
+            hv = self.hand_view
+            pose = camera_pose(
+                view, hv.T_object_palm, hv.points_mm("thumb"), hv.points_mm(),
+                self.obj.mesh.bounds,
+            )  # fmt: skip
+            scale = MM
         cam.up_direction = tuple(pose.up)
-        cam.position = tuple(pose.position * MM)
-        cam.look_at = tuple(pose.look_at * MM)  # after position: position moves look_at along
+        cam.position = tuple(pose.position * scale)
+        cam.look_at = tuple(pose.look_at * scale)  # after position: position moves look_at
 
     def state_query(self) -> str:
         """The link query of the current state."""
