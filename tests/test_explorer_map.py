@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -75,3 +77,26 @@ def test_scene_picture_pixels_map_back_to_degrees() -> None:
     changed_big = int((starred != big.image).any(-1).sum())
     changed_small = int((with_star(small, 30.0, 45.0) != small.image).any(-1).sum())
     assert 3 * changed_small < changed_big < 5 * changed_small  # about 4x the pixels
+
+
+@pytest.mark.subprocess
+def test_server_initialises_image_encoders_before_any_tab(tmp_path: Path) -> None:
+    """Tabs opening at once encode their first images in parallel threads; PIL's plugin
+    imports racing there deadlocked sessions (never finished, never freed). The server
+    imports them up front, in a fresh process as in ``handbench serve``."""
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    code = (
+        "import PIL.Image as I; from app.explorer.server import ExplorerServer; "
+        "assert I._initialized == 0, I._initialized; "
+        "s = ExplorerServer('127.0.0.1', 0, sys.argv[1], objects=['chips_can'], workers=0); "
+        "n = I._initialized; s.stop(); print(n)"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", "import sys; " + code, str(tmp_path / "s.sqlite")], cwd=root, capture_output=True, text=True, timeout=120,
+        env={"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"},
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip().splitlines()[-1] == "2"  # every plugin imported

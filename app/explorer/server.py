@@ -89,6 +89,26 @@ def release_memory() -> None:
         pass
 
 
+def warm_up_encoders() -> None:
+    """Encode one tiny PNG and JPEG the way viser does, in the calling thread.
+
+    The first image a session adds makes PIL import its format plugins. Tabs opening at once
+    build their sessions in parallel threads of viser's pool, and their concurrent first
+    imports deadlocked on Python's import locks: those sessions never finished (nor freed
+    their memory, nor drew their map). Importing once, up front, takes the race away."""
+    import numpy as np
+    from PIL import Image
+
+    Image.init()
+    try:
+        from viser._scene_api import _encode_image_binary  # noqa: PLC2701 - the same path
+    except ImportError:  # a viser without it encodes elsewhere; PIL is initialised anyway
+        return
+    tiny = np.zeros((2, 2, 3), np.uint8)
+    for fmt in ("png", "jpeg"):
+        _encode_image_binary(tiny, fmt, jpeg_quality=None)  # type: ignore[arg-type]
+
+
 def workers_from_env() -> int | None:
     env = os.environ.get(WORKERS_ENV, "").strip()
     return int(env) if env else None
@@ -109,6 +129,7 @@ class ExplorerServer:
         debounce_s: float = 0.3,
         reference_dir: str | Path | None = None,
     ) -> None:
+        warm_up_encoders()
         objs = tuple(objects) if objects else _objects_from_env()
         for k in objs:
             load_object(k)  # UnknownObjectError lists the valid keys
@@ -140,6 +161,11 @@ class ExplorerServer:
         s = Session(client, self.ctx)
         with self._lock:
             self.sessions[client.client_id] = s
+        # viser runs the connect and disconnect callbacks on a thread pool, unordered: a tab
+        # closed while its session was being built had its disconnect find no session. The
+        # client is gone from viser's list by then, so look again now that it is registered.
+        if client.client_id not in self.viser.get_clients():
+            self._disconnect(client)
 
     def _disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
