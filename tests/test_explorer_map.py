@@ -94,8 +94,9 @@ def test_server_initialises_image_encoders_before_any_tab(tmp_path: Path) -> Non
         "s = ExplorerServer('127.0.0.1', 0, sys.argv[1], objects=['chips_can'], workers=0); "
         "n = I._initialized; s.stop(); print(n)"
     )
+    cmd = [sys.executable, "-c", "import sys; " + code, str(tmp_path / "s.sqlite")]
     out = subprocess.run(
-        [sys.executable, "-c", "import sys; " + code, str(tmp_path / "s.sqlite")], cwd=root, capture_output=True, text=True, timeout=120,
+        cmd, cwd=root, capture_output=True, text=True, timeout=120,
         env={"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"},
     )  # fmt: skip
     assert out.returncode == 0, out.stderr[-2000:]
