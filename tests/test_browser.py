@@ -91,10 +91,25 @@ def slider(page: Any, label: str) -> Any:
     return row.filter(has=page.get_by_role("slider")).last.get_by_role("slider")
 
 
+def closed_toasts(page: Any) -> list[str]:
+    """The viser toasts the page script closed ('title | description')."""
+    return page.evaluate("() => window.__hbToasts || []")
+
+
 def test_page_draws_hand(server: ExplorerServer, browser: Any) -> None:
+    from app.explorer.page_toasts import WEBGL_TOAST_S
+
     page, s = open_tab(server, browser)
     try:
         assert set(s.hand_view.nodes) >= {"palm", "thumb_distal", "index_distal"}
+        # the software-WebGL toast closes by itself (SwiftShader here)
+        webgl = page.get_by_text("Software WebGL rendering detected")
+        webgl.wait_for(state="hidden", timeout=(WEBGL_TOAST_S + 10) * 1000)
+        assert any(t.startswith("Software WebGL") for t in closed_toasts(page))
+        # no hover hints (they covered the tab bar): captions instead
+        handles = s.client.gui._gui_input_handle_from_uuid.values()  # noqa: SLF001
+        hints = [getattr(h, "hint", None) for h in handles]
+        assert hints and all(h is None for h in hints)
         img = s.client.get_render(300, 400, transport_format="png", timeout=30)
         assert img.shape[:2] == (300, 400) and not_blank(img)
         hide_toasts(page)
@@ -110,6 +125,27 @@ def test_page_draws_hand(server: ExplorerServer, browser: Any) -> None:
         wait_until(lambda: "saved" in s.share_panel.saved.content, 30, "the saved PNG")
         saved = list((BUILD / "shots").glob("handbench_c0_m45_chips_can_gh0_*.png"))
         assert saved and not_blank((plt.imread(saved[0]) * 255).astype(np.uint8))
+        # the saved path and the link wrap inside the panel
+        for text in ("(and sent as a download)", "Link to this state:"):
+            el = page.get_by_text(text).last
+            el.wait_for()
+            fits = el.evaluate("e => e.scrollWidth <= e.clientWidth + 1")
+            panel_right = page.get_by_role("tab", name="Share").evaluate(
+                "e => e.closest('[role=tablist]').getBoundingClientRect().right"
+            )
+            box = el.bounding_box()
+            assert fits and box["x"] + box["width"] <= panel_right + 2, text
+        # import: viser's "File uploaded successfully." toast is closed; the verdict stays
+        page.get_by_role("tab", name="Design").click()
+        page.get_by_text("Import a mesh").click()
+        page.locator("input[type=file]").set_input_files(
+            files=[{"name": "flat.stl", "mimeType": "model/stl",
+                    "buffer": b"solid flat\nendsolid flat\n"}]
+        )  # fmt: skip
+        wait_until(lambda: "import failed" in s.import_panel.status.content, 30, "the verdict")
+        wait_until(lambda: any("File uploaded successfully" in t for t in closed_toasts(page)),
+                   10, "the upload toast closed")  # fmt: skip
+        page.get_by_text("File uploaded successfully.").wait_for(state="hidden", timeout=5_000)
     finally:
         page.close()
 

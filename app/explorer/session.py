@@ -18,6 +18,7 @@ from app.errors import HandbenchError
 from app.explorer import url_state
 from app.explorer.input_commit import commit_script_html
 from app.explorer.live_score import ScoreWorker
+from app.explorer.page_toasts import toast_script_html
 from app.explorer.panel_design import DesignPanel
 from app.explorer.panel_import import ImportPanel
 from app.explorer.panel_map import MapPanel
@@ -147,6 +148,7 @@ class Session:
         gui.configure_theme(control_width="large")
         gui.add_markdown("**handbench** design explorer")
         gui.add_html(commit_script_html())
+        gui.add_html(toast_script_html())
         # object and view above the tabs: reachable from the design and the grasp replays
         keys = available_keys()
         self.object_dd = gui.add_dropdown("Object", options=keys, initial_value=self.object_key)
