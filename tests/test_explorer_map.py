@@ -101,3 +101,23 @@ def test_server_initialises_image_encoders_before_any_tab(tmp_path: Path) -> Non
     )  # fmt: skip
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip().splitlines()[-1] == "2"  # every plugin imported
+
+
+def test_last_tab_closing_empties_the_simulation_caches() -> None:
+    """The contact caches hold every hand's link shapes (one hand per design change of any
+    tab); the server empties them, and the kits, when no tab is left."""
+    from app.explorer.server import drop_simulation_caches
+    from app.model.hand.model import build_hand
+    from app.sim import contacts
+    from app.sim.simulate import cached_kit
+
+    hand = build_hand(15.0, 60.0)
+    for lk in hand.links[:3]:
+        contacts._samples(lk.shape, 2.0)  # noqa: SLF001
+        contacts._coarse(lk.shape, 2.0)  # noqa: SLF001
+    cached_kit(15.0, 60.0, "ulnar")
+    assert contacts._samples.cache_info().currsize >= 1  # noqa: SLF001
+    drop_simulation_caches()
+    assert contacts._samples.cache_info().currsize == 0  # noqa: SLF001
+    assert contacts._coarse.cache_info().currsize == 0  # noqa: SLF001
+    assert cached_kit.cache_info().currsize == 0
