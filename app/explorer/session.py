@@ -42,11 +42,13 @@ from app.sim.closing_settings import ClosingSettings
 from app.sim.hypotheses import Hypotheses
 from app.sim.hypothesis_sets import cached_hypotheses
 from app.sim.replay import Replay, replay
-from app.sim.simulate import HandKit, base_kit
+from app.sim.simulate import Grasp, HandKit, base_kit
 
 REPLAY_HZ = 30.0
 LINK_TIMEOUT_S = 60.0
 """How long a new tab may take to report its link (retried requests, busy browsers)."""
+FLOOR_GAP_MM = 12.0
+"""The floor grid sits this far under the lowest point of the object and the hand."""
 GHOST_HOLD_S = 4.0
 """The previous design's thumb stays as a ghost this long after the last design change."""
 
@@ -314,7 +316,7 @@ class Session:
             self.replay_panel.select_index(self.gh)
             self._refresh_outcomes()
             self.object_view.set_object(obj.mesh.vertices, obj.mesh.faces)
-            self.object_view.set_contacts(None)
+            self._show_contacts(None)
             if redraw:
                 self._show_final()
                 self.share_panel.update_link()
@@ -367,13 +369,21 @@ class Session:
             self.object_view.set_palm_point(
                 g.T_object_palm, self.hand.approach_point_palm, self.obj.spec.setup.hand_vector_palm
             )
-            self.object_view.set_contacts(g.contacts)
-            self._place_floor()
+            self._show_contacts(g)
+            self._place_floor(rep)
             self.replay_panel.stage.content = "final grasp"
             self.replay_panel.result.content = outcome_markdown(
                 out, self.hyps.ids[i], len(g.contacts)
             )
         self.client.flush()
+
+    def _show_contacts(self, grasp: Grasp | None) -> None:
+        """The grasp's contacts (or none); the object and the links that carry a contact turn
+        translucent while they are shown, so every marker is in sight from every view."""
+        contacts = None if grasp is None else grasp.contacts
+        self.object_view.set_contacts(contacts)
+        links = set() if contacts is None else {str(k) for k in contacts.link}
+        self.hand_view.set_see_through(links)
 
     def on_play(self) -> None:
         """Play the replay of the selected GH (approach, back-off, closing stages)."""
@@ -396,7 +406,7 @@ class Session:
         with self.lock:
             if cancel.is_set():
                 return
-            self.object_view.set_contacts(None)
+            self._show_contacts(None)
         hand_vector = self.obj.spec.setup.hand_vector_palm
         period = 1.0 / REPLAY_HZ
         t_next = time.perf_counter()
@@ -415,7 +425,7 @@ class Session:
             time.sleep(max(0.0, t_next - time.perf_counter()))
         with self.lock:
             if not cancel.is_set() and not self._closed:
-                self.object_view.set_contacts(rep.grasp.contacts)
+                self._show_contacts(rep.grasp)
                 self.replay_panel.stage.content = "final grasp"
 
     def _stop_player(self) -> None:
@@ -443,10 +453,15 @@ class Session:
         if self.ghost.visible and not self._closed:
             self.ghost.set_visible(False)
 
-    def _place_floor(self) -> None:
-        """The floor grid just under the lowest point of the hand and the object."""
-        z = min(float(self.obj.mesh.bounds[0, 2]), float(self.hand_view.points_mm()[:, 2].min()))
-        self.floor.position = (0.0, 0.0, (z - 12.0) * MM)
+    def _place_floor(self, rep: Replay) -> None:
+        """The floor grid just under the lowest point of the object and of the hand in every
+        frame of the replay (its approach may dip below the final grasp): no finger passes
+        through it while the replay plays."""
+        hv = self.hand_view
+        z = min(float(self.obj.mesh.bounds[0, 2]), float(hv.points_mm()[:, 2].min()))
+        for f in rep.frames[:: max(1, len(rep.frames) // 60)] + rep.frames[-1:]:
+            z = min(z, float(hv.points_mm_at(self.hand, f.T_object_palm, f.q)[:, 2].min()))
+        self.floor.position = (0.0, 0.0, (z - FLOOR_GAP_MM) * MM)
 
     # ------------------------------------------------------------------ scores
     def _object_scored(self, key: str) -> None:
