@@ -32,6 +32,29 @@ def rss_mb(pid: int) -> float:
     return 0.0
 
 
+def threads(pid: int) -> int:
+    """Threads of ``pid``, from /proc."""
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("Threads:"):
+            return int(line.split()[1])
+    return 0
+
+
+def settle(pid: int, quiet_s: float, max_s: float) -> float:
+    """Wait until the server's thread count has not changed for ``quiet_s`` (its sessions'
+    threads have ended), at most ``max_s``; the seconds waited."""
+    t0 = time.monotonic()
+    last, since = threads(pid), time.monotonic()
+    while time.monotonic() - t0 < max_s:
+        time.sleep(0.25)
+        n = threads(pid)
+        if n != last:
+            last, since = n, time.monotonic()
+        elif time.monotonic() - since >= quiet_s:
+            break
+    return time.monotonic() - t0
+
+
 def children(pid: int) -> list[int]:
     """Direct child processes of ``pid``."""
     try:
@@ -45,7 +68,11 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--tabs", type=int, default=8)
     ap.add_argument("--rounds", type=int, default=10)
-    ap.add_argument("--settle", type=float, default=3.0, help="seconds after closing the tabs")
+    ap.add_argument(
+        "--settle", type=float, default=3.0,
+        help="after closing the tabs, wait until the server's thread count is steady this long",
+    )  # fmt: skip
+    ap.add_argument("--settle-max", type=float, default=60.0, help="... but at most this long")
     args = ap.parse_args()
 
     from app.explorer.browser import browser_context
@@ -85,7 +112,7 @@ def main() -> int:
                 opened = rss_mb(srv.pid)
                 for page in pages:
                     page.close()
-                time.sleep(args.settle)
+                settle(srv.pid, args.settle, args.settle_max)
                 closed = rss_mb(srv.pid)
                 rows.append((r + 1, opened, closed, time.perf_counter() - t0))
                 print(

@@ -16,6 +16,20 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def _screen(camera, p, box) -> tuple[float, float]:  # noqa: ANN001
+    """Page pixel of world point ``p`` (m) seen by viser's camera on the canvas ``box``."""
+    pos, look = np.asarray(camera.position, float), np.asarray(camera.look_at, float)
+    f = (look - pos) / np.linalg.norm(look - pos)
+    r = np.cross(f, np.asarray(camera.up_direction, float))
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    v = np.asarray(p, float) - pos
+    t = np.tan(float(camera.fov) / 2)
+    nx = float(v @ r) / (float(v @ f) * t * float(camera.aspect))
+    ny = float(v @ u) / (float(v @ f) * t)
+    return box["x"] + (nx + 1) / 2 * box["width"], box["y"] + (1 - ny) / 2 * box["height"]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--out", default=str(ROOT / "build" / "shots"))
@@ -95,10 +109,59 @@ def main() -> None:
             page.wait_for_timeout(800)
             page.screenshot(path=str(out / "map_tab.png"))
             print(f"map: {len(s.map_panel.points)} designs, {s.map_panel.renders} full renders")
+            # the value labels' size on screen: 9 pt at 100 dpi in the layout (12.5 px)
+            label_px = 9 / 72 * 100
+            shown = page.evaluate(
+                "() => Math.max(...[...document.images].filter(i => i.naturalWidth === 400)"
+                ".map(i => i.clientWidth / i.naturalWidth))"
+            )
+            print(f"panel map: shown at {shown:.2f}x, value labels {label_px * shown:.1f} px")
+
+            # the clickable map in the scene: show it, click a design, time the star
+            page.get_by_role("button", name="Pick a design on the map (3-D view)").click()
+            sm = s.map_panel.scene_map
+            assert sm is not None
+            t_end = time.monotonic() + 30
+            while not (sm.visible and sm.shown_at) and time.monotonic() < t_end:
+                time.sleep(0.05)
+            wait_drawn(page, s.client, 60)
+            page.wait_for_timeout(500)
+            base = s.map_panel._scene_base  # noqa: SLF001
+            assert base is not None
+            cam, box = s.client.camera, page.locator("canvas").first.bounding_box()
+            assert box is not None
+            top = _screen(cam, sm.placement.world_of_pixel(0, 0, base.size), box)
+            bottom = _screen(cam, sm.placement.world_of_pixel(0, base.size[1], base.size), box)
+            scale = (bottom[1] - top[1]) / base.size[1]
+            print(
+                f"scene map: {base.size[1]} px image shown {bottom[1] - top[1]:.0f} px tall, "
+                f"value labels {label_px * base.scale * scale:.1f} px"
+            )
+            page.screenshot(path=str(out / "map_scene.png"))
+            target = _screen(
+                cam, sm.placement.world_of_pixel(*base.pixel(15.0, 60.0), base.size), box
+            )
+            t0 = time.monotonic()
+            page.mouse.click(*target)
+            while s.map_panel.star_at != (15.0, 60.0) and time.monotonic() - t0 < 10:
+                time.sleep(0.01)
+            t_star = time.monotonic() - t0
+            while sm.shown_at < t0 and time.monotonic() - t0 < 10:
+                time.sleep(0.01)
+            t_scene = sm.shown_at - t0
+            print(
+                f"click on CMC 15°, MCP 60°: picks {sm.picks}, design "
+                f"({s.design.cmc_deg:g}, {s.design.mcp_deg:g}); star in the panel map "
+                f"{t_star:.2f} s, in the scene map {t_scene:.2f} s after the click"
+            )
+            wait_drawn(page, s.client, 60)
+            page.wait_for_timeout(500)
+            page.screenshot(path=str(out / "map_scene_clicked.png"))
     finally:
         srv.stop()
     print(
-        f"wrote {out}/design_c30_m45.png, design_c30_m75.png, replay_three_colours.png, map_tab.png"
+        f"wrote {out}/design_c30_m45.png, design_c30_m75.png, replay_three_colours.png, "
+        "map_tab.png, map_scene.png, map_scene_clicked.png"
     )
 
 

@@ -8,8 +8,6 @@ pictures (not blank, right size).
 
 from __future__ import annotations
 
-import argparse
-import os
 import shutil
 import time
 from collections.abc import Callable, Iterator
@@ -34,6 +32,9 @@ from app.explorer.session import Session  # noqa: E402
 
 BUILD = Path(__file__).resolve().parents[1] / "build" / "test_browser"
 OBJECTS = ["chips_can"]  # one object keeps the live S_GAS work small
+NO_SGAS_S = 3600.0
+"""The tabs' S_GAS debounce: no computation (it would take the CPU the browser needs) except
+in the test that checks it starts."""
 
 
 def wait_until(cond: Callable[[], Any], timeout: float = 30.0, what: str = "condition") -> Any:
@@ -58,16 +59,16 @@ def server() -> Iterator[ExplorerServer]:
     BUILD.mkdir(parents=True)
     srv = ExplorerServer(
         "127.0.0.1", 0, BUILD / "store.sqlite", objects=OBJECTS, workers=0,
-        shots_dir=BUILD / "shots", debounce_s=0.2,
+        shots_dir=BUILD / "shots", debounce_s=NO_SGAS_S,
     )  # fmt: skip
     yield srv
     srv.stop()
 
 
-@pytest.fixture()
+@pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
-    """A fresh chromium per test (playwright's sync API cannot nest, and the screenshot
-    command starts its own)."""
+    """One chromium for the module (each test opens and closes its own tabs; the screenshot
+    command, which starts its own playwright, is tested in test_browser_cli.py)."""
     with browser_context(1280, 800, BUILD / "profiles") as ctx:
         yield ctx
 
@@ -91,10 +92,25 @@ def slider(page: Any, label: str) -> Any:
     return row.filter(has=page.get_by_role("slider")).last.get_by_role("slider")
 
 
+def closed_toasts(page: Any) -> list[str]:
+    """The viser toasts the page script closed ('title | description')."""
+    return page.evaluate("() => window.__hbToasts || []")
+
+
 def test_page_draws_hand(server: ExplorerServer, browser: Any) -> None:
+    from app.explorer.page_toasts import WEBGL_TOAST_S
+
     page, s = open_tab(server, browser)
     try:
         assert set(s.hand_view.nodes) >= {"palm", "thumb_distal", "index_distal"}
+        # the software-WebGL toast closes by itself (SwiftShader here)
+        webgl = page.get_by_text("Software WebGL rendering detected")
+        webgl.wait_for(state="hidden", timeout=(WEBGL_TOAST_S + 10) * 1000)
+        assert any(t.startswith("Software WebGL") for t in closed_toasts(page))
+        # no hover hints (they covered the tab bar): captions instead
+        handles = s.client.gui._gui_input_handle_from_uuid.values()  # noqa: SLF001
+        hints = [getattr(h, "hint", None) for h in handles]
+        assert hints and all(h is None for h in hints)
         img = s.client.get_render(300, 400, transport_format="png", timeout=30)
         assert img.shape[:2] == (300, 400) and not_blank(img)
         hide_toasts(page)
@@ -110,12 +126,37 @@ def test_page_draws_hand(server: ExplorerServer, browser: Any) -> None:
         wait_until(lambda: "saved" in s.share_panel.saved.content, 30, "the saved PNG")
         saved = list((BUILD / "shots").glob("handbench_c0_m45_chips_can_gh0_*.png"))
         assert saved and not_blank((plt.imread(saved[0]) * 255).astype(np.uint8))
+        # the saved path and the link wrap inside the panel
+        for text in ("(and sent as a download)", "Link to this state:"):
+            el = page.get_by_text(text).last
+            el.wait_for()
+            fits = el.evaluate("e => e.scrollWidth <= e.clientWidth + 1")
+            panel_right = page.get_by_role("tab", name="Share").evaluate(
+                "e => e.closest('[role=tablist]').getBoundingClientRect().right"
+            )
+            box = el.bounding_box()
+            assert fits and box["x"] + box["width"] <= panel_right + 2, text
+        # import: viser's "File uploaded successfully." toast is closed; the verdict stays
+        page.get_by_role("tab", name="Design").click()
+        page.get_by_text("Import a mesh").click()
+        page.locator("input[type=file]").set_input_files(
+            files=[{"name": "flat.stl", "mimeType": "model/stl",
+                    "buffer": b"solid flat\nendsolid flat\n"}]
+        )  # fmt: skip
+        wait_until(lambda: "import failed" in s.import_panel.status.content, 30, "the verdict")
+        wait_until(lambda: any("File uploaded successfully" in t for t in closed_toasts(page)),
+                   10, "the upload toast closed")  # fmt: skip
+        page.get_by_text("File uploaded successfully.").wait_for(state="hidden", timeout=5_000)
     finally:
         page.close()
 
 
 def test_cmc_slider_moves_thumb_and_starts_sgas(server: ExplorerServer, browser: Any) -> None:
-    page, s = open_tab(server, browser)
+    server.ctx.debounce_s = 0.2  # this tab computes S_GAS
+    try:
+        page, s = open_tab(server, browser)
+    finally:
+        server.ctx.debounce_s = NO_SGAS_S
     try:
         cmc0 = s.design.cmc_deg
         thumb0 = s.hand_view.link_position_mm("thumb_distal")
@@ -158,6 +199,17 @@ def test_replay_shows_contacts(server: ExplorerServer, browser: Any) -> None:
         assert np.asarray(node.batched_positions).shape == (s.object_view.n_contacts, 3)
         assert "FC:" in s.replay_panel.result.content
         assert "correct:" in s.replay_panel.result.content
+        # the links carrying a contact are translucent (no marker hidden behind a finger)
+        hv = s.hand_view
+        assert s.last is not None
+        touching = {str(k) for k in s.last.grasp.contacts.link}
+        assert hv.see_through == touching and touching
+        assert all((hv.nodes[n].opacity is not None) == (n in touching) for n in hv.nodes)
+        # the floor grid is under the hand in every frame of the replay
+        floor_mm = s.floor.position[2] / 1e-3
+        lowest = min(hv.points_mm_at(s.hand, f.T_object_palm, f.q)[:, 2].min()
+                     for f in s.last.frames)  # fmt: skip
+        assert floor_mm < lowest
     finally:
         page.close()
 
@@ -189,31 +241,6 @@ def test_two_tabs_keep_separate_states(server: ExplorerServer, browser: Any) -> 
         pa.close()
         if not pb.is_closed():
             pb.close()
-
-
-def test_screenshot_command(monkeypatch: pytest.MonkeyPatch) -> None:
-    from app.explorer.screenshot import screenshot_cli
-
-    monkeypatch.setenv("HANDBENCH_EXPLORER_OBJECTS", "small_marker")
-    monkeypatch.setenv("HANDBENCH_EXPLORER_WORKERS", "0")
-    cwd = BUILD / "cwd"
-    cwd.mkdir()
-    monkeypatch.chdir(cwd)  # the command must not write a profile here
-    monkeypatch.setenv("XDG_CACHE_HOME", str(BUILD / "cache"))
-    out = BUILD / "cli.png"
-    args = argparse.Namespace(
-        cmc=30.0, mcp=75.0, cmc_tilt="ulnar", object="small_marker", gh="3", out=str(out),
-        size="900x600", view="scene", store=str(BUILD / "cli_store.sqlite"), no_wait=True,
-    )  # fmt: skip
-    assert screenshot_cli(args) == 0
-    assert list(cwd.iterdir()) == []
-    assert (BUILD / "cache" / "handbench" / "chromium").is_dir()
-    import matplotlib.pyplot as plt
-
-    img = plt.imread(out)
-    assert img.shape[:2] == (600, 900)
-    assert not_blank((img * 255).astype(np.uint8))
-    assert os.path.getsize(out) > 10_000
 
 
 def number_box(page: Any, label: str) -> Any:
@@ -290,21 +317,77 @@ def test_object_switch_during_replay(server: ExplorerServer, browser: Any) -> No
         page.close()
 
 
-def test_eight_tabs_opened_at_once_apply_their_links(server: ExplorerServer) -> None:
+def test_eight_tabs_opened_at_once_apply_their_links(server: ExplorerServer, browser: Any) -> None:
     designs = [(c, m) for c in (0.0, 15.0, 30.0, 45.0) for m in (30.0, 60.0)]
     before = set(server.sessions)
-    with browser_context(480, 320, BUILD / "profiles") as ctx:
-        pages = [ctx.new_page() for _ in designs]
-        for page, (c, m) in zip(pages, designs, strict=True):  # no wait between tabs
-            page.goto(f"{server.url}/?cmc={c:g}&mcp={m:g}&gh={int(c + m)}", wait_until="commit")
-        new = wait_until(
-            lambda: (ids := set(server.sessions) - before) and len(ids) == 8 and ids, 120,
-            "8 sessions",
-        )  # fmt: skip
-        sessions = [server.sessions[i] for i in new]
-        wait_until(lambda: all(s.ready.is_set() for s in sessions), 120, "8 links applied")
-        got = sorted((s.design.cmc_deg, s.design.mcp_deg, s.gh) for s in sessions)
-        assert got == sorted((c, m, int(c + m)) for c, m in designs)
-        assert [s.link_error for s in sessions] == [None] * 8
-        for page in pages:
-            page.close()
+    # small tabs: eight software-rendered canvases at once
+    pages = [browser.new_page() for _ in designs]
+    for page, (c, m) in zip(pages, designs, strict=True):  # no wait between tabs
+        page.set_viewport_size({"width": 480, "height": 320})
+        page.goto(f"{server.url}/?cmc={c:g}&mcp={m:g}&gh={int(c + m)}", wait_until="commit")
+    new = wait_until(
+        lambda: (ids := set(server.sessions) - before) and len(ids) == 8 and ids, 120,
+        "8 sessions",
+    )  # fmt: skip
+    sessions = [server.sessions[i] for i in new]
+    wait_until(lambda: all(s.ready.is_set() for s in sessions), 120, "8 links applied")
+    got = sorted((s.design.cmc_deg, s.design.mcp_deg, s.gh) for s in sessions)
+    assert got == sorted((c, m, int(c + m)) for c, m in designs)
+    assert [s.link_error for s in sessions] == [None] * 8
+    for page in pages:
+        page.close()
+
+
+def screen_point(camera: Any, p: Any, box: dict[str, float]) -> tuple[float, float]:
+    """Page pixel (x, y) of world point ``p`` (m) seen by viser's ``camera`` on the canvas
+    ``box`` (a pinhole camera: vertical field of view ``fov``, ``aspect`` width/height)."""
+    pos, look = np.asarray(camera.position, float), np.asarray(camera.look_at, float)
+    f = (look - pos) / np.linalg.norm(look - pos)
+    r = np.cross(f, np.asarray(camera.up_direction, float))
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    v = np.asarray(p, float) - pos
+    t = np.tan(float(camera.fov) / 2)
+    nx = float(v @ r) / (float(v @ f) * t * float(camera.aspect))
+    ny = float(v @ u) / (float(v @ f) * t)
+    return box["x"] + (nx + 1) / 2 * box["width"], box["y"] + (1 - ny) / 2 * box["height"]
+
+
+def test_click_on_scene_map_selects_design(server: ExplorerServer, browser: Any) -> None:
+    page, s = open_tab(server, browser, "?cmc=0&mcp=45")
+    try:
+        sm = s.map_panel.scene_map
+        assert sm is not None and not sm.visible  # hidden in the hand's views
+        page.get_by_role("tab", name="Map").click()
+        page.get_by_role("button", name="Pick a design on the map (3-D view)").click()
+        wait_until(lambda: sm.visible and sm.shown_at > 0, 15, "the in-scene map")
+        assert s.view_dd.value == "design map"
+        wait_until(lambda: (30.0, 75.0) in [(p.cmc_deg, p.mcp_deg) for p in s.map_panel.points],
+                   15, "the map's designs")  # fmt: skip
+        wait_drawn(page, s.client, 30)
+        page.wait_for_timeout(300)  # the camera's move has reached the page
+        base = s.map_panel._scene_base  # noqa: SLF001
+        assert base is not None
+        target = sm.placement.world_of_pixel(*base.pixel(30.0, 75.0), base.size)
+        box = page.locator("canvas").first.bounding_box()
+        x, y = screen_point(s.client.camera, target, box)
+        assert 0 < x < 1280 * 0.66 and 0 < y < 800  # left of the control panel
+        before = s.map_panel.star_time
+        page.mouse.click(x + 4, y - 3)  # a few px off the point still picks it
+        t0 = time.monotonic()
+        wait_until(lambda: s.map_panel.star_at == (30.0, 75.0), 10, "the star on the new design")
+        t_star = time.monotonic() - t0
+        assert sm.picks == [(30.0, 75.0)]
+        assert s.map_panel.star_time > before and t_star < 0.5
+        wait_until(lambda: (s.design.cmc_deg, s.design.mcp_deg) == (30.0, 75.0), 10, "design")
+        assert (s.design_panel.cmc.value, s.design_panel.mcp.value) == (30.0, 75.0)
+        page.get_by_role("tab", name="Design").click()  # the page's sliders moved too
+        assert number_box(page, "CMC (°)").input_value() == "30"
+        assert number_box(page, "MCP (°)").input_value() == "75"
+        # a click off the designs (on the title) selects nothing
+        title = sm.placement.world_of_pixel(base.size[0] / 2, 12 * base.scale, base.size)
+        page.mouse.click(*screen_point(s.client.camera, title, box))
+        page.wait_for_timeout(500)
+        assert sm.picks == [(30.0, 75.0)]
+    finally:
+        page.close()

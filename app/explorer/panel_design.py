@@ -65,7 +65,7 @@ class DesignPanel:
             marks=tuple((v, f"{v:g}") for v in (0.0, 45.0, 90.0)),
         )  # fmt: skip
         self.message = gui.add_markdown("")
-        # the field docs as a caption, not as hover hints (those covered the tab bar)
+        # captions, never hover hints: those covered the tab bar
         gui.add_markdown(
             f"<small>c: {docs['cmc_deg']}  \nm: {docs['mcp_deg']}  \n"
             "Type a value and press Enter; drags move by 5°.</small>"
@@ -77,14 +77,13 @@ class DesignPanel:
             "Published",
             options=(CUSTOM, *self._published),
             initial_value=design_label(BASELINE),
-            hint="Snap to one of the 28 published design alternatives.",
         )
-        self.baseline = gui.add_button("Baseline (0°, 45°)", hint="c = 0°, m = 45°")
-        self.axes = gui.add_checkbox(
-            "Thumb axes",
-            initial_value=True,
-            hint="CMC axis red, MCP green, IP blue; magenta: the thumb pad's flexion path "
-            "(faded: the previous design)",
+        self.baseline = gui.add_button("Baseline (0°, 45°)")
+        self.axes = gui.add_checkbox("Thumb axes", initial_value=True)
+        gui.add_markdown(
+            "<small>Published: the 28 published design alternatives. Thumb axes: CMC red, "
+            "MCP green, IP blue; magenta: the thumb pad's flexion path (faded: the previous "
+            "design).</small>"
         )
         self.cmc.on_update(lambda _: self._changed())
         self.mcp.on_update(lambda _: self._changed())

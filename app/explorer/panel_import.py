@@ -18,16 +18,14 @@ class ImportPanel:
     def __init__(self, gui: viser.GuiApi, on_imported: Callable[[str], None]) -> None:
         self._on_imported = on_imported
         like_opts: tuple[str, ...] = OBJECT_KEYS
-        self.like = gui.add_dropdown(
-            "Grasp like", options=like_opts, initial_value="chips_can",
-            hint="The imported mesh takes this object's grasp set-up (target, cone, rolls).",
-        )  # fmt: skip
+        self.like = gui.add_dropdown("Grasp like", options=like_opts, initial_value="chips_can")
         unit_opts: tuple[str, ...] = ("mm", "m")
         self.units = gui.add_dropdown("File units", options=unit_opts, initial_value="mm")
-        self.upload = gui.add_upload_button(
-            "Import STL/OBJ/PLY", icon=viser.Icon.UPLOAD,
-            hint="Object frame as in the file; +z up, origin at the base centre works best.",
-        )  # fmt: skip
+        self.upload = gui.add_upload_button("Import STL/OBJ/PLY", icon=viser.Icon.UPLOAD)
+        gui.add_markdown(
+            "<small>The mesh takes the grasp set-up (target, cone, rolls) of 'Grasp like'. "
+            "Object frame as in the file; +z up, origin at the base centre works best.</small>"
+        )
         self.status = gui.add_markdown("")
         self.upload.on_upload(lambda _: self._uploaded())
 

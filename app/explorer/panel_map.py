@@ -27,6 +27,7 @@ from app.explorer.map_data import (  # noqa: E402
     metric_value,
 )
 from app.explorer.reference import SOURCE_LABEL  # noqa: E402
+from app.explorer.scene_map import SCENE_SCALE, SceneMap  # noqa: E402
 from app.model.design import CMC_RANGE_DEG, MCP_RANGE_DEG  # noqa: E402
 from app.quality.settings import SimSettings  # noqa: E402
 from app.reports.design_map import interpolate_map  # noqa: E402
@@ -53,6 +54,8 @@ class MapImage:
     px_per_deg: tuple[float, float]
     """Pixels per degree along CMC (x, rightward) and MCP (y, upward: negative)."""
     metric: str
+    scale: float = 1.0
+    """Pixels per layout pixel (``render_base``'s ``scale``)."""
 
     def pixel(self, cmc_deg: float, mcp_deg: float) -> tuple[float, float]:
         """Pixel (x, y) of a design."""
@@ -61,6 +64,18 @@ class MapImage:
             self.origin_px[1] + mcp_deg * self.px_per_deg[1],
         )
 
+    def degrees(self, x: float, y: float) -> tuple[float, float]:
+        """(CMC, MCP) degrees at pixel (x, y): the inverse of ``pixel``."""
+        return (
+            (x - self.origin_px[0]) / self.px_per_deg[0],
+            (y - self.origin_px[1]) / self.px_per_deg[1],
+        )
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(W, H) px."""
+        return (int(self.image.shape[1]), int(self.image.shape[0]))
+
 
 def _labelled(points: Sequence[MapPoint]) -> list[bool]:
     if len(points) <= MAX_LABELS:
@@ -68,12 +83,15 @@ def _labelled(points: Sequence[MapPoint]) -> list[bool]:
     return [p.cmc_deg % LABEL_GRID_DEG == 0 and p.mcp_deg % LABEL_GRID_DEG == 0 for p in points]
 
 
-def render_base(points: Sequence[MapPoint], metric: str, size=MAP_SIZE) -> MapImage:
+def render_base(
+    points: Sequence[MapPoint], metric: str, size=MAP_SIZE, scale: float = 1.0
+) -> MapImage:
     """The map of ``metric``: contours, a horizontal colour bar under the axes (clear of the
     labels), the designs, and value labels placed inside the axes (left of the point at the
-    CMC 45° edge, below it at the MCP 90° edge), on a white box."""
+    CMC 45° edge, below it at the MCP 90° edge), on a white box. ``scale`` multiplies the
+    pixels, not the layout (the in-scene map is drawn at twice the panel's resolution)."""
     w, h = size
-    fig = plt.figure(figsize=(w / 100, h / 100), dpi=100)
+    fig = plt.figure(figsize=(w / 100, h / 100), dpi=100 * scale)
     ax = fig.add_axes((0.15, 0.30, 0.80, 0.62))
     cax = fig.add_axes((0.15, 0.12, 0.80, 0.035))
     c = np.array([p.cmc_deg for p in points])
@@ -139,6 +157,7 @@ def render_base(points: Sequence[MapPoint], metric: str, size=MAP_SIZE) -> MapIm
         ),
         ((x1 - x0) / span_c, -(y1 - y0) / span_m),
         metric,
+        scale,
     )
 
 
@@ -155,24 +174,31 @@ def _star_mask(r_out: float, size: int) -> np.ndarray:
     )
 
 
-_STAR_SIZE = 25
-_STAR_EDGE = _star_mask(11.0, _STAR_SIZE)
-_STAR_FILL = _star_mask(7.5, _STAR_SIZE)
+_STARS: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+
+def _star(size: int) -> tuple[np.ndarray, np.ndarray]:
+    """(edge, fill) masks of a star ``size`` px wide (cached)."""
+    if size not in _STARS:
+        _STARS[size] = (_star_mask(size * 0.44, size), _star_mask(size * 0.30, size))
+    return _STARS[size]
 
 
 def with_star(base: MapImage, cmc_deg: float, mcp_deg: float) -> np.ndarray:
     """The map with the current design's star (red, black edge): a few ms, no re-render."""
     img = base.image.copy()
+    size = int(round(25 * base.scale))
+    edge, fill = _star(size)
     x, y = base.pixel(cmc_deg, mcp_deg)
-    x0, y0 = int(round(x)) - _STAR_SIZE // 2, int(round(y)) - _STAR_SIZE // 2
+    x0, y0 = int(round(x)) - size // 2, int(round(y)) - size // 2
     H, W = img.shape[:2]
     sx0, sy0 = max(0, -x0), max(0, -y0)
-    sx1, sy1 = min(_STAR_SIZE, W - x0), min(_STAR_SIZE, H - y0)
+    sx1, sy1 = min(size, W - x0), min(size, H - y0)
     if sx1 <= sx0 or sy1 <= sy0:
         return img
     win = img[y0 + sy0 : y0 + sy1, x0 + sx0 : x0 + sx1]
-    win[_STAR_EDGE[sy0:sy1, sx0:sx1]] = (0, 0, 0)
-    win[_STAR_FILL[sy0:sy1, sx0:sx1]] = (230, 20, 20)
+    win[edge[sy0:sy1, sx0:sx1]] = (0, 0, 0)
+    win[fill[sy0:sy1, sx0:sx1]] = (230, 20, 20)
     return img
 
 
@@ -219,7 +245,11 @@ class MapPanel:
         objects: Sequence[str],
         on_pick: Callable[[float, float], None],
         ref_dir: Path | None = None,
+        scene: viser.SceneApi | None = None,
+        on_show_scene: Callable[[], None] | None = None,
     ) -> None:
+        """``scene``: also draw the map as a clickable image in the 3-D scene
+        (``SceneMap``, shown by the 'design map' view; ``on_show_scene`` selects that view)."""
         self.store = store
         self.ref_dir = ref_dir
         self.tilt = "ulnar"
@@ -232,6 +262,12 @@ class MapPanel:
                                        initial_value=TOTAL)  # fmt: skip
         self.image = gui.add_image(np.full((44, 40, 3), 255, np.uint8), format="png")
         gui.add_markdown(LEGEND_MD)
+        self.scene_map = SceneMap(scene, on_pick) if scene is not None else None
+        self.scene_btn: viser.GuiButtonHandle | None = None
+        if on_show_scene is not None:
+            btn = gui.add_button("Pick a design on the map (3-D view)", icon=viser.Icon.POINTER)
+            btn.on_click(lambda _: on_show_scene())
+            self.scene_btn = btn
         pick_opts: tuple[str, ...] = (PICK_NONE,)
         self.pick = gui.add_dropdown("Go to design", options=pick_opts,
                                      initial_value=PICK_NONE)  # fmt: skip
@@ -244,6 +280,7 @@ class MapPanel:
         self._dirty: bool | None = None  # None: clean; False: redraw; True: reload + redraw
         self._busy = False
         self._base: MapImage | None = None
+        self._scene_base: MapImage | None = None
         self.renders = 0
         """Full renders (contours); moving the star is not one."""
         self.star_at: tuple[float, float] | None = None
@@ -252,8 +289,16 @@ class MapPanel:
         self.refresh()
 
     def _new_metric(self) -> None:
-        self._base = None
+        self._base = self._scene_base = None
         self._kick(reload=False)
+
+    def set_scene_visible(self, visible: bool) -> None:
+        """Show or hide the in-scene map (drawn when first shown, then kept up to date)."""
+        if self.scene_map is None or visible == self.scene_map.visible:
+            return
+        self.scene_map.set_visible(visible)
+        if visible:
+            self._kick(reload=False)
 
     def set_current(self, cmc_deg: float, mcp_deg: float) -> None:
         """Move the current-design marker."""
@@ -298,14 +343,27 @@ class MapPanel:
                 opts = (PICK_NONE, *(p.label for p in self.points))
                 if tuple(self.pick.options) != opts:
                     self.pick.options = opts
-                self._base = None
+                self._base = self._scene_base = None
             base = self._base
-            if base is None or base.metric != self.metric.value:
-                base = self._base = render_base(self.points, self.metric.value)
+            metric = self.metric.value
+            if base is None or base.metric != metric:
+                base = self._base = render_base(self.points, metric)
                 self.renders += 1
             current = self.current
             self.image.image = with_star(base, *current)
             self.star_at, self.star_time = current, time.monotonic()
+            self._draw_scene(current, metric)
+
+    def _draw_scene(self, current: tuple[float, float], metric: str) -> None:
+        """The in-scene map with the star, while it is shown (hidden: nothing to send)."""
+        sm = self.scene_map
+        if sm is None or not sm.visible:
+            return
+        base = self._scene_base
+        if base is None or base.metric != metric:
+            base = self._scene_base = render_base(self.points, metric, scale=SCENE_SCALE)
+        designs = [(p.cmc_deg, p.mcp_deg) for p in self.points]
+        sm.update(with_star(base, *current), base.degrees, designs)
 
     def _picked(self) -> None:
         label = self.pick.value

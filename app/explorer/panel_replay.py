@@ -75,17 +75,20 @@ class ReplayPanel:
         self.standoff = gui.add_dropdown("Standoff", options=only_all, initial_value=ALL)
         self.roll = gui.add_dropdown("Roll", options=only_all, initial_value=ALL)
         self.ray = gui.add_dropdown("Ray", options=only_all, initial_value=ALL)
-        self.outcome = gui.add_dropdown(
-            "Outcome", options=OUTCOME_FILTERS, initial_value=ALL,
-            hint="Filter by the stored outcome of this design (computed by the S_GAS worker).",
-        )  # fmt: skip
+        self.outcome = gui.add_dropdown("Outcome", options=OUTCOME_FILTERS, initial_value=ALL)
+        gui.add_markdown(
+            "<small>Outcome: the stored outcome of this design (the S_GAS worker's).</small>"
+        )
         self.gh = gui.add_slider("GH", min=0, max=1, step=1, initial_value=0)
         self.count = gui.add_markdown("")
         self.play = gui.add_button("Play replay", icon=viser.Icon.PLAYER_PLAY)
         self.mode = gui.add_dropdown(
-            "Closing", options=CLOSING_MODES, initial_value=CLOSING_MODES[0],
-            hint="sequential (published), independent thumb, or coupled tendon (METHOD §4)",
-        )  # fmt: skip
+            "Closing", options=CLOSING_MODES, initial_value=CLOSING_MODES[0]
+        )
+        gui.add_markdown(
+            "<small>Closing: sequential (published), independent thumb, or coupled tendon "
+            "(METHOD §4).</small>"
+        )
         self.stage = gui.add_markdown("")
         self.result = gui.add_markdown("")
         gui.add_markdown(LEGEND_MD)

@@ -27,6 +27,21 @@ def png_bytes(rgb: np.ndarray) -> bytes:
     return buf.getvalue()
 
 
+WRAP = "<div style='overflow-wrap:anywhere;word-break:break-word'>{}</div>"
+"""Long paths and links wrap inside the panel instead of running out of it."""
+
+
+def short_path(path: Path) -> str:
+    """``path`` relative to the working folder, or with ``~`` for the home folder."""
+    path = Path(path).absolute()
+    for base, shown in ((Path.cwd(), ""), (Path.home(), "~/")):
+        try:
+            return shown + str(path.relative_to(base))
+        except ValueError:
+            continue
+    return str(path)
+
+
 def lan_hint(port: int) -> str:
     """How to reach this server from another machine of the network."""
     try:
@@ -109,7 +124,7 @@ class SharePanel:
     def update_link(self) -> None:
         """Show the link that reopens the current design, object and GH."""
         url = self._state_link()
-        self.link.content = f"Link to this state:  \n[{url}]({url})"
+        self.link.content = WRAP.format(f"Link to this state:<br><a href='{url}'>{url}</a>")
 
     def _save(self) -> None:
         self.saved.content = "rendering…"
@@ -125,7 +140,10 @@ class SharePanel:
         path = self._shots_dir / name
         path.write_bytes(data)
         self._download(name, data)
-        self.saved.content = f"saved `{path}` (and sent as a download)"
+        folder = short_path(path.parent)
+        self.saved.content = WRAP.format(
+            f"saved <b>{name}</b><br>in <code>{folder}</code> (and sent as a download)"
+        )
 
     def _share(self) -> None:
         self.share_md.content = "asking viser's share server…"

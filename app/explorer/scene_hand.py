@@ -12,6 +12,9 @@ HAND_COLOR = (214, 186, 160)
 THUMB_COLOR = (196, 160, 130)
 GHOST_COLOR = (90, 130, 220)
 GHOST_OPACITY = 0.35
+SEE_THROUGH_OPACITY = 0.5
+"""Links that carry a contact are this opaque while contacts are shown: a contact sits
+between the finger and the object, so an opaque finger hid it from half the views."""
 #: Joint-axis colours: CMC red, MCP green, IP blue (thumb), long fingers grey.
 AXIS_COLORS = ((220, 40, 40), (30, 160, 60), (40, 90, 220))
 AXIS_HALF_LENGTH_MM = 22.0
@@ -64,6 +67,8 @@ class HandView:
         self.show_axes = ghost
         self.thumb_axes_only = True
         """Only the thumb's axes (the design); the long fingers' are the same in every one."""
+        self.see_through: set[str] = set()
+        """Links drawn translucent now (``set_see_through``)."""
         self.hand = hand
         self.T_object_palm = np.eye(4)
         self.q = hand.q_open
@@ -81,6 +86,16 @@ class HandView:
             node.position = pos
         self._draw_axes()
 
+    def set_see_through(self, links: set[str]) -> None:
+        """Make ``links`` translucent (the ones carrying shown contacts), the others opaque."""
+        if self.ghost:
+            return
+        for name, node in self.nodes.items():
+            want = SEE_THROUGH_OPACITY if name in links else None
+            if node.opacity != want:
+                node.opacity = want
+        self.see_through = set(links) & set(self.nodes)
+
     def set_visible(self, visible: bool) -> None:
         """Show or hide every link node."""
         for node in self.nodes.values():
@@ -96,10 +111,16 @@ class HandView:
 
     def points_mm(self, prefix: str = "") -> np.ndarray:
         """(8K, 3) box corners of the links named ``prefix``…, object frame, mm (framing)."""
-        T = self.T_object_palm[None] @ self.hand.link_poses(self.q)
+        return self.points_mm_at(self.hand, self.T_object_palm, self.q, prefix)
+
+    def points_mm_at(
+        self, hand: Hand, T_object_palm: np.ndarray, q: np.ndarray, prefix: str = ""
+    ) -> np.ndarray:
+        """``points_mm`` of ``hand`` placed at ``T_object_palm`` with joints ``q``."""
+        T = np.asarray(T_object_palm)[None] @ hand.link_poses(np.asarray(q, float))
         out = [
             self._corners[lk.name] @ T[k, :3, :3].T + T[k, :3, 3]
-            for k, lk in enumerate(self.hand.links)
+            for k, lk in enumerate(hand.links)
             if lk.name.startswith(prefix)
         ]
         return np.vstack(out)

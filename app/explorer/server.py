@@ -89,6 +89,51 @@ def release_memory() -> None:
         pass
 
 
+def warm_up_encoders() -> None:
+    """Encode one tiny PNG and JPEG the way viser does, in the calling thread.
+
+    The first image a session adds makes PIL import its format plugins. Tabs opening at once
+    build their sessions in parallel threads of viser's pool, and their concurrent first
+    imports deadlocked on Python's import locks: those sessions never finished (nor freed
+    their memory, nor drew their map). Importing once, up front, takes the race away."""
+    import numpy as np
+    from PIL import Image
+
+    Image.init()
+    try:
+        from viser._scene_api import _encode_image_binary  # noqa: PLC2701 - the same path
+    except ImportError:  # a viser without it encodes elsewhere; PIL is initialised anyway
+        return
+    tiny = np.zeros((2, 2, 3), np.uint8)
+    for fmt in ("png", "jpeg"):
+        _encode_image_binary(tiny, fmt, jpeg_quality=None)  # type: ignore[arg-type]
+
+
+def drop_simulation_caches() -> None:
+    """Empty the per-process simulation caches that hold the tabs' hands.
+
+    Every hand a tab builds (one per design change) has new link shapes, and the contact
+    code caches each shape's surface samples and their k-d tree (``lru_cache`` of 512 shapes,
+    held by the shape object): with 8 tabs opened and closed the server's RSS grew ~15 MB a
+    round until those caches were full. The kits (``cached_kit``) and, when loaded, the
+    compiled engine's arrays go too. Called when the last tab closes; the next tab refills
+    what it uses."""
+    import sys
+
+    from app.sim import contacts
+
+    cached_kit.cache_clear()
+    for name in ("_samples", "_coarse"):  # private caches of app.sim.contacts
+        fn = getattr(contacts, name, None)
+        if fn is not None and hasattr(fn, "cache_clear"):
+            fn.cache_clear()
+    compiled = sys.modules.get("app.sim.closing_compiled")
+    for name in ("_CACHE", "_CHAIN_CACHE"):
+        cache = getattr(compiled, name, None)
+        if isinstance(cache, dict):
+            cache.clear()
+
+
 def workers_from_env() -> int | None:
     env = os.environ.get(WORKERS_ENV, "").strip()
     return int(env) if env else None
@@ -109,6 +154,7 @@ class ExplorerServer:
         debounce_s: float = 0.3,
         reference_dir: str | Path | None = None,
     ) -> None:
+        warm_up_encoders()
         objs = tuple(objects) if objects else _objects_from_env()
         for k in objs:
             load_object(k)  # UnknownObjectError lists the valid keys
@@ -140,6 +186,11 @@ class ExplorerServer:
         s = Session(client, self.ctx)
         with self._lock:
             self.sessions[client.client_id] = s
+        # viser runs the connect and disconnect callbacks on a thread pool, unordered: a tab
+        # closed while its session was being built had its disconnect find no session. The
+        # client is gone from viser's list by then, so look again now that it is registered.
+        if client.client_id not in self.viser.get_clients():
+            self._disconnect(client)
 
     def _disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
@@ -151,8 +202,8 @@ class ExplorerServer:
 
             with self._lock:
                 idle = not self.sessions
-            if idle:  # no tab left: drop the per-design simulation kits the tabs built
-                cached_kit.cache_clear()
+            if idle:  # no tab left: drop what the tabs' hands left in the simulation caches
+                drop_simulation_caches()
             gc.collect()  # sessions sit in reference cycles (handles <-> callbacks)
             release_memory()
 

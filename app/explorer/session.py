@@ -18,6 +18,7 @@ from app.errors import HandbenchError
 from app.explorer import url_state
 from app.explorer.input_commit import commit_script_html
 from app.explorer.live_score import ScoreWorker
+from app.explorer.page_toasts import toast_script_html
 from app.explorer.panel_design import DesignPanel
 from app.explorer.panel_import import ImportPanel
 from app.explorer.panel_map import MapPanel
@@ -27,7 +28,7 @@ from app.explorer.panel_share import SharePanel, request_share_url
 from app.explorer.scene_hand import HandView
 from app.explorer.scene_object import ObjectView
 from app.explorer.units import MM
-from app.explorer.views import DEFAULT_VIEW, VIEWS, camera_pose
+from app.explorer.views import DEFAULT_VIEW, MAP, VIEWS, camera_pose, map_camera_pose
 from app.model.design import BASELINE, ThumbDesign
 from app.model.hand.model import Hand, build_hand
 from app.model.objects import available_keys, load_object
@@ -41,11 +42,13 @@ from app.sim.closing_settings import ClosingSettings
 from app.sim.hypotheses import Hypotheses
 from app.sim.hypothesis_sets import cached_hypotheses
 from app.sim.replay import Replay, replay
-from app.sim.simulate import HandKit, base_kit
+from app.sim.simulate import Grasp, HandKit, base_kit
 
 REPLAY_HZ = 30.0
 LINK_TIMEOUT_S = 60.0
 """How long a new tab may take to report its link (retried requests, busy browsers)."""
+FLOOR_GAP_MM = 12.0
+"""The floor grid sits this far under the lowest point of the object and the hand."""
 GHOST_HOLD_S = 4.0
 """The previous design's thumb stays as a ghost this long after the last design change."""
 
@@ -147,6 +150,7 @@ class Session:
         gui.configure_theme(control_width="large")
         gui.add_markdown("**handbench** design explorer")
         gui.add_html(commit_script_html())
+        gui.add_html(toast_script_html())
         # object and view above the tabs: reachable from the design and the grasp replays
         keys = available_keys()
         self.object_dd = gui.add_dropdown("Object", options=keys, initial_value=self.object_key)
@@ -167,8 +171,9 @@ class Session:
             )
         with tabs.add_tab("Map", viser.Icon.MAP):
             self.map_panel = MapPanel(
-                gui, self.ctx.store, self.ctx.objects, self._map_select, self.ctx.reference_dir
-            )
+                gui, self.ctx.store, self.ctx.objects, self._map_select, self.ctx.reference_dir,
+                scene=self.client.scene, on_show_scene=self._show_scene_map,
+            )  # fmt: skip
         with tabs.add_tab("Share", viser.Icon.SHARE):
             self.share_panel = SharePanel(
                 gui,
@@ -311,7 +316,7 @@ class Session:
             self.replay_panel.select_index(self.gh)
             self._refresh_outcomes()
             self.object_view.set_object(obj.mesh.vertices, obj.mesh.faces)
-            self.object_view.set_contacts(None)
+            self._show_contacts(None)
             if redraw:
                 self._show_final()
                 self.share_panel.update_link()
@@ -339,7 +344,14 @@ class Session:
         self.on_object(key)
 
     def _map_select(self, cmc_deg: float, mcp_deg: float) -> None:
+        """'Go to design' and clicks on the in-scene map: one path."""
         self.design_panel.set_design(cmc_deg, mcp_deg)
+
+    def _show_scene_map(self) -> None:
+        if self.view_dd.value != MAP:
+            self.view_dd.value = MAP  # its on_update frames the camera
+        else:
+            self.frame_camera()
 
     # ------------------------------------------------------------------ grasp
     def _show_final(self) -> None:
@@ -357,13 +369,21 @@ class Session:
             self.object_view.set_palm_point(
                 g.T_object_palm, self.hand.approach_point_palm, self.obj.spec.setup.hand_vector_palm
             )
-            self.object_view.set_contacts(g.contacts)
-            self._place_floor()
+            self._show_contacts(g)
+            self._place_floor(rep)
             self.replay_panel.stage.content = "final grasp"
             self.replay_panel.result.content = outcome_markdown(
                 out, self.hyps.ids[i], len(g.contacts)
             )
         self.client.flush()
+
+    def _show_contacts(self, grasp: Grasp | None) -> None:
+        """The grasp's contacts (or none); the object and the links that carry a contact turn
+        translucent while they are shown, so every marker is in sight from every view."""
+        contacts = None if grasp is None else grasp.contacts
+        self.object_view.set_contacts(contacts)
+        links = set() if contacts is None else {str(k) for k in contacts.link}
+        self.hand_view.set_see_through(links)
 
     def on_play(self) -> None:
         """Play the replay of the selected GH (approach, back-off, closing stages)."""
@@ -386,7 +406,7 @@ class Session:
         with self.lock:
             if cancel.is_set():
                 return
-            self.object_view.set_contacts(None)
+            self._show_contacts(None)
         hand_vector = self.obj.spec.setup.hand_vector_palm
         period = 1.0 / REPLAY_HZ
         t_next = time.perf_counter()
@@ -405,7 +425,7 @@ class Session:
             time.sleep(max(0.0, t_next - time.perf_counter()))
         with self.lock:
             if not cancel.is_set() and not self._closed:
-                self.object_view.set_contacts(rep.grasp.contacts)
+                self._show_contacts(rep.grasp)
                 self.replay_panel.stage.content = "final grasp"
 
     def _stop_player(self) -> None:
@@ -433,10 +453,15 @@ class Session:
         if self.ghost.visible and not self._closed:
             self.ghost.set_visible(False)
 
-    def _place_floor(self) -> None:
-        """The floor grid just under the lowest point of the hand and the object."""
-        z = min(float(self.obj.mesh.bounds[0, 2]), float(self.hand_view.points_mm()[:, 2].min()))
-        self.floor.position = (0.0, 0.0, (z - 12.0) * MM)
+    def _place_floor(self, rep: Replay) -> None:
+        """The floor grid just under the lowest point of the object and of the hand in every
+        frame of the replay (its approach may dip below the final grasp): no finger passes
+        through it while the replay plays."""
+        hv = self.hand_view
+        z = min(float(self.obj.mesh.bounds[0, 2]), float(hv.points_mm()[:, 2].min()))
+        for f in rep.frames[:: max(1, len(rep.frames) // 60)] + rep.frames[-1:]:
+            z = min(z, float(hv.points_mm_at(self.hand, f.T_object_palm, f.q)[:, 2].min()))
+        self.floor.position = (0.0, 0.0, (z - FLOOR_GAP_MM) * MM)
 
     # ------------------------------------------------------------------ scores
     def _object_scored(self, key: str) -> None:
@@ -458,15 +483,24 @@ class Session:
     def frame_camera(self) -> None:
         """Point the camera as the View dropdown says (views.py: from the palmar-radial
         side, so the thumb and its opposition are in sight)."""
-        hv = self.hand_view
-        pose = camera_pose(
-            self.view_dd.value, hv.T_object_palm, hv.points_mm("thumb"), hv.points_mm(),
-            self.obj.mesh.bounds,
-        )  # fmt: skip
+        view = self.view_dd.value
+        self.map_panel.set_scene_visible(view == MAP)
         cam = self.client.camera
+        if view == MAP:
+            sm = self.map_panel.scene_map
+            assert sm is not None
+            pose = map_camera_pose(sm.placement, float(cam.fov), float(cam.aspect))
+            scale = 1.0  # the map's pose is in metres already
+        else:
+            hv = self.hand_view
+            pose = camera_pose(
+                view, hv.T_object_palm, hv.points_mm("thumb"), hv.points_mm(),
+                self.obj.mesh.bounds,
+            )  # fmt: skip
+            scale = MM
         cam.up_direction = tuple(pose.up)
-        cam.position = tuple(pose.position * MM)
-        cam.look_at = tuple(pose.look_at * MM)  # after position: position moves look_at along
+        cam.position = tuple(pose.position * scale)
+        cam.look_at = tuple(pose.look_at * scale)  # after position: position moves look_at
 
     def state_query(self) -> str:
         """The link query of the current state."""

@@ -12,11 +12,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from app.errors import HandbenchError
+from app.explorer.map_pick import MapPlacement
 
 THUMB = "thumb close-up"
 GRASP = "grasp"
 OVERVIEW = "overview"
-VIEWS: tuple[str, ...] = (THUMB, GRASP, OVERVIEW)
+MAP = "design map"
+"""Not a view of the hand: the clickable design map hung in the scene (``scene_map``)."""
+VIEWS: tuple[str, ...] = (THUMB, GRASP, OVERVIEW, MAP)
 DEFAULT_VIEW = GRASP
 
 #: View directions in the palm frame (radial, distal, palmar), before normalising.
@@ -89,3 +92,18 @@ def camera_pose(
     right /= max(float(np.linalg.norm(right)), 1e-9)
     target = centre + right * panel_shift * radius
     return CameraPose(target + d * radius * _DISTANCE[view], target, up)
+
+
+def map_camera_pose(
+    placement: MapPlacement, fov_rad: float, aspect: float, panel_frac: float = 0.33
+) -> CameraPose:
+    """The camera of the 'design map' view, in metres: square on to the map, which fills
+    87 % of the height, moved left on the screen by half the control panel's share
+    (``panel_frac``) of the width, so the panel hides none of it."""
+    c = np.asarray(placement.centre, float)
+    span_h = placement.height / 0.87
+    dist = span_h / 2 / np.tan(fov_rad / 2)
+    span_w = span_h * aspect
+    shift = min(panel_frac / 2 * span_w, max(span_w / 2 - placement.width / 2, 0.0))
+    target = c + np.array([shift, 0.0, 0.0])
+    return CameraPose(target - np.array([0.0, dist, 0.0]), target, np.array([0.0, 0.0, 1.0]))
