@@ -132,6 +132,23 @@ def drop_simulation_caches() -> None:
         cache = getattr(compiled, name, None)
         if isinstance(cache, dict):
             cache.clear()
+    release_freed_memory()
+
+
+def release_freed_memory() -> bool:
+    """Give the heap's freed pages back to the system (glibc ``malloc_trim``): freed Python
+    and numpy memory otherwise stays in the process's arenas, and RSS stays at its peak after
+    the tabs close. Returns whether it ran (False off glibc)."""
+    import ctypes
+    import gc
+
+    gc.collect()
+    try:
+        libc = ctypes.CDLL("libc.so.6")
+        libc.malloc_trim(0)
+    except (OSError, AttributeError):
+        return False
+    return True
 
 
 def workers_from_env() -> int | None:
