@@ -66,9 +66,43 @@ def test_score_table_partial() -> None:
     assert "59.5" in md  # chips_can S_GAS = (200 + 50) / 420
     # no mean over the finished objects: the totals wait for every object
     assert "(partial)" not in md and "total **" not in md
-    assert "once all 2 objects are done (1 done" in md
+    assert "once every object has a first sample (1 done" in md
     # the running object's estimate so far: (1 + 1) / 30 = 6.7 %, with its intervals
     assert "≈6.7 (95 % CI" in md and "certain 0–97" in md
+
+
+def test_first_sample_gives_estimated_totals() -> None:
+    """Once every object has a value or a random sample, PP, CG and total are shown as
+    estimates whose bounds are the means of the objects' bounds (not the final bold total)."""
+    from app.explorer.live_score import ObjectProgress, ScoreSnapshot, snapshot_markdown
+    from app.model.design import ThumbDesign
+
+    s = ScoreSnapshot(
+        ThumbDesign(15, 60),
+        {"chips_can": (420, 300, 200), "washer": (24, 12, 6)},
+        {"chips_can": 420, "washer": 1026},
+        state="computing",
+    )
+    p = ObjectProgress("washer", 1026, 24, 12, 6, computed=24, elapsed_s=0.5,
+                       source="random sample")  # fmt: skip
+    s.progress["washer"] = p
+    est = s.estimates()
+    assert est is not None and set(est) == {"pp", "cg", "total"}
+    v, lo, hi = est["total"]
+    w_lo, w_hi = p.interval_pct
+    assert v == pytest.approx((59.52380952 + p.estimate_pct) / 2)
+    assert lo == pytest.approx((59.52380952 + w_lo) / 2) and hi == pytest.approx(
+        (59.52380952 + w_hi) / 2
+    )
+    assert lo < v < hi
+    assert est["cg"] == pytest.approx((59.52380952,) * 3)
+    md = snapshot_markdown(s)
+    assert f"total ≈{v:.1f} ({lo:.1f}–{hi:.1f})" in md and "total **" not in md
+    # a run-order (not random) sample gives the certain range instead of the interval
+    s.progress["washer"] = ObjectProgress("washer", 1026, 24, 12, 6)
+    assert s.estimates()["total"][1] == pytest.approx(
+        (59.52380952 + s.progress["washer"].certain_pct[0]) / 2
+    )  # type: ignore[index]
 
 
 def test_link_tilt() -> None:

@@ -49,3 +49,16 @@ def test_order_does_not_change_scores(tmp_path: Path) -> None:
         rb = run_sweep(list(D), ["washer"], store=sb, shuffle_seed=3, **kw)
     assert ra is not None and rb is not None
     assert ra.scores[0].objects == rb.scores[0].objects
+
+
+def test_first_sample_is_the_prefix_of_the_seeded_order(tmp_path: Path) -> None:
+    """``first_n``: the first n hypotheses of each object's seeded order, so a first sample
+    followed by the rest is one random order (the union stays a simple random sample)."""
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        objs = ["washer", "chips_can"]
+        full = plan_tasks(store, D, objs, SimSettings(), chunk=7, shuffle_seed=0)
+        first = plan_tasks(store, D, objs, SimSettings(), chunk=24, shuffle_seed=0, first_n=24)
+    assert [t.object_name for t in first] == objs  # one task per object
+    for t in first:
+        order = [i for u in full if u.object_name == t.object_name for i in u.gh]
+        assert list(t.gh) == order[:24]

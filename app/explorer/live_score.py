@@ -40,6 +40,8 @@ Z95 = 1.959963984540054
 #: Seed of the order in which the live score computes an object's hypotheses: a seeded random
 #: order, so the hypotheses done at any moment are a simple random sample of the object's.
 SAMPLE_SEED = 0
+#: Hypotheses of every object computed first, all objects at once, for a first estimate.
+FIRST_SAMPLE = 24
 
 
 def wilson_interval(successes: float, n: int, z: float = Z95) -> tuple[float, float]:
@@ -146,6 +148,39 @@ class ScoreSnapshot:
     """The object being computed (and any with a subsample estimate): progress so far."""
     rate_per_s: float | None = None
     """Hypotheses per second of the latest computation (for the time left of pending objects)."""
+    first_sample_s: float | None = None
+    """Seconds from the start of the computation to the first sample of every object."""
+
+    def estimates(self) -> dict[str, tuple[float, float, float]] | None:
+        """PP, CG and total S_GAS estimates (%) with bounds, once every object has a value or
+        a sample: 'pp'/'cg'/'total' -> (estimate, low, high). A complete object counts with
+        its value; a sampled one with its estimate and its 95 % interval, and the bounds of
+        a mean are the means of the objects' bounds (each object's interval holds with 95 %;
+        the mean of the bounds is wider than a 95 % interval of the mean)."""
+        score = self.score()
+        per: dict[str, tuple[float, float, float]] = {}
+        for k in self.n_gh:
+            if k in score.objects:
+                v = score.objects[k].sgas_pct
+                per[k] = (v, v, v)
+                continue
+            p = self.progress.get(k)
+            if p is None or p.done == 0:
+                return None
+            lo, hi = p.interval_pct if p.source == "random sample" else p.certain_pct
+            per[k] = (p.estimate_pct, lo, hi)
+        out: dict[str, tuple[float, float, float]] = {}
+        groups = {
+            "pp": [k for k in per if load_object(k).spec.grasp_type == "PP"],
+            "cg": [k for k in per if load_object(k).spec.grasp_type == "CG"],
+            "total": list(per),
+        }
+        for name, keys in groups.items():
+            if keys:
+                out[name] = tuple(  # type: ignore[assignment]
+                    sum(per[k][i] for k in keys) / len(keys) for i in range(3)
+                )
+        return out
 
     def remaining_s(self) -> float | None:
         """Time left for every incomplete object at the measured rate (None: unknown)."""
@@ -236,10 +271,21 @@ def snapshot_markdown(s: ScoreSnapshot) -> str:
             f"total **{_pct(score.total_sgas_pct)}** (your store)"
         )
     else:
-        rows.append(
-            f"PP, CG and total: once all {len(s.n_gh)} objects are done "
-            f"({len(score.objects)} done; {_secs(s.remaining_s())})"
-        )
+        est = s.estimates()
+        if est is not None:
+            parts = [
+                f"{name.upper() if name != 'total' else 'total'} ≈{v:.1f} ({lo:.1f}–{hi:.1f})"
+                for name, (v, lo, hi) in est.items()
+            ]
+            rows.append(
+                " · ".join(parts) + " — estimates from the objects' samples and 95 % intervals "
+                f"({len(score.objects)} of {len(s.n_gh)} objects done; {_secs(s.remaining_s())})"
+            )
+        else:
+            rows.append(
+                f"PP, CG and total: once every object has a first sample "
+                f"({len(score.objects)} done; {_secs(s.remaining_s())})"
+            )
     if s.seconds:
         rows.append(f"computed in {s.seconds:.1f} s")
     if s.reference is not None:
@@ -365,7 +411,37 @@ class ScoreWorker:
         t0 = time.perf_counter()
         snap = read_snapshot(self.store, design, self.objects, settings, self.ref_dir)
         snap.state = "computing"
+        # stored before this run: 0 means the object's outcomes will be a prefix of its seeded
+        # random order (first sample, then the rest in the same order), a simple random sample
+        start_have = {k: snap.counts.get(k, (0, 0, 0))[0] for k in self.objects}
         try:
+            todo = [k for k in self.objects if not snap.complete(k)]
+            if len(todo) > 1:
+                # first sample: the first FIRST_SAMPLE hypotheses of every object's order, all
+                # objects at once (one task each, in parallel), so that every object and the
+                # total have an estimate with an interval within about a second
+                snap.state = "computing a first sample of every object"
+                self.on_snapshot(snap)
+                t_first = time.perf_counter()
+                res = run_sweep(
+                    [design], todo, settings=settings, store=self.store, executor=self.executor,
+                    chunk=FIRST_SAMPLE, progress=False, cancel=cancel, shuffle_seed=SAMPLE_SEED,
+                    first_n=FIRST_SAMPLE,
+                )  # fmt: skip
+                if res is None or cancel.is_set():
+                    return
+                fresh = read_snapshot(self.store, design, self.objects, settings, self.ref_dir)
+                dt = time.perf_counter() - t_first
+                for k in todo:
+                    n, fc, c = fresh.counts.get(k, (0, 0, 0))
+                    snap.counts[k] = (n, fc, c)
+                    snap.progress[k] = ObjectProgress(
+                        k, snap.n_gh[k], n, fc, c, computed=n - start_have[k], elapsed_s=dt,
+                        source="random sample" if start_have[k] == 0 else "run order",
+                    )  # fmt: skip
+                snap.first_sample_s = time.perf_counter() - t0
+                snap.state = "computing"
+                self.on_snapshot(snap)
             for key in self.objects:
                 if cancel.is_set():
                     return
@@ -374,7 +450,10 @@ class ScoreWorker:
                 snap.running = key
                 have, fc0, c0 = snap.counts.get(key, (0, 0, 0))
                 snap.done, snap.total = 0, snap.n_gh[key] - have
-                snap.progress[key] = ObjectProgress(key, snap.n_gh[key], have, fc0, c0)
+                sampled = "random sample" if start_have[key] == 0 else "run order"
+                snap.progress[key] = ObjectProgress(
+                    key, snap.n_gh[key], have, fc0, c0, source=sampled
+                )
                 self.on_snapshot(snap)
                 t_obj = time.perf_counter()
 
@@ -385,6 +464,7 @@ class ScoreWorker:
                     key: str = key,
                     have: int = have,
                     t_obj: float = t_obj,
+                    sampled: str = sampled,
                 ) -> None:
                     snap.done, snap.total = done, total
                     if cancel.is_set():
@@ -395,8 +475,7 @@ class ScoreWorker:
                     )
                     p = ObjectProgress(
                         key, snap.n_gh[key], n, fc, c, computed=n - have,
-                        elapsed_s=time.perf_counter() - t_obj,
-                        source="random sample" if have == 0 else "run order",
+                        elapsed_s=time.perf_counter() - t_obj, source=sampled,
                     )  # fmt: skip
                     snap.progress[key] = p
                     snap.rate_per_s = p.rate_per_s or snap.rate_per_s

@@ -276,6 +276,9 @@ class Session:
         if design != self.design:
             self._show_ghost()
         self.design = design
+        # the score first: its worker cancels the old design's work and starts this one's
+        # (after its debounce) while the hand and the grasp are redrawn
+        self.worker.request(design, self.settings)
         self.hand = build_hand(design.cmc_deg, design.mcp_deg, cmc_tilt=design.cmc_tilt)
         self.kit = HandKit(self.hand)
         T, q = self.hand_view.T_object_palm, self.hand_view.q
@@ -289,7 +292,6 @@ class Session:
         t2 = time.perf_counter()
         self.timings.hand_redraw.append(t1 - t0)
         self.timings.grasp_redraw.append(t2 - t0)
-        self.worker.request(design, self.settings)
         self._refresh_outcomes()
         self.share_panel.update_link()
 

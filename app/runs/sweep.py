@@ -113,6 +113,7 @@ def run_sweep(
     cancel: threading.Event | None = None,
     gh_stride: int = 1,
     shuffle_seed: int | None = None,
+    first_n: int | None = None,
 ) -> SweepResult | None:
     """Evaluate every design on every object; resumes from and writes to ``store``.
 
@@ -120,7 +121,8 @@ def run_sweep(
     ``(done, total)``. ``gh_stride`` > 1 previews on every k-th hypothesis of each object
     (scores are then over that subset: the published numbers need ``gh_stride=1``).
     ``shuffle_seed``: compute the hypotheses in a seeded random order (``plan_tasks``), so a
-    run stopped early holds a random sample.
+    run stopped early holds a random sample. ``first_n``: only the first n hypotheses of each
+    object's order (``plan_tasks``; the scores are then over that subset).
     """
     if gh_stride < 1:
         from app.errors import SettingsError
@@ -135,11 +137,14 @@ def run_sweep(
     for name in object_names:
         store.put_object_meta(object_key(name), {"key": name})
     tasks = plan_tasks(
-        store, designs, object_names, settings, chunk, gh_stride, shuffle_seed=shuffle_seed
-    )
+        store, designs, object_names, settings, chunk, gh_stride, shuffle_seed=shuffle_seed,
+        first_n=first_n,
+    )  # fmt: skip
     done = execute_tasks(tasks, store, skey, object_key, executor, progress, cancel)
     if cancel is not None and cancel.is_set():
         return None
+    if first_n is not None:  # a first sample: the designs are not complete, no scores yet
+        return SweepResult(list(designs), [], done, time.perf_counter() - t0)
     scores = [score_design(store, d, object_names, settings, gh_stride) for d in designs]
     return SweepResult(list(designs), scores, done, time.perf_counter() - t0)
 

@@ -100,6 +100,7 @@ def plan_tasks(
     gh_stride: int = 1,
     hypothesis_set: str = "anthropomorphic",
     shuffle_seed: int | None = None,
+    first_n: int | None = None,
 ) -> list[Task]:
     """Tasks for every (design, object, GH) not yet in the store (every ``gh_stride``-th GH).
 
@@ -108,7 +109,8 @@ def plan_tasks(
     ``shuffle_seed``: when given, each object's hypotheses are taken in a seeded random order
     (the same for every call), so the outcomes finished at any moment are a simple random
     sample of the object's hypotheses: an honest running estimate. Outcomes do not depend on
-    the order.
+    the order. ``first_n``: only the first n hypotheses of each object's order (with a
+    shuffle seed: the first n of its random order, the explorer's first sample).
     """
     skey = settings.key()
     dkeys = [design_key(d) for d in designs]
@@ -121,6 +123,8 @@ def plan_tasks(
         if shuffle_seed is not None:
             order = np.random.default_rng([shuffle_seed, len(subset)]).permutation(len(subset))
             subset = [subset[k] for k in order]
+        if first_n is not None:
+            subset = subset[:first_n]
         for start in range(0, len(subset), chunk):
             idx = subset[start : start + chunk]
             # group designs by which of these GHs they lack (usually: all or none)
