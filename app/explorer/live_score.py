@@ -41,7 +41,7 @@ Z95 = 1.959963984540054
 #: order, so the hypotheses done at any moment are a simple random sample of the object's.
 SAMPLE_SEED = 0
 #: Hypotheses of every object computed first, all objects at once, for a first estimate.
-FIRST_SAMPLE = 24
+FIRST_SAMPLE = 12
 
 
 def wilson_interval(successes: float, n: int, z: float = Z95) -> tuple[float, float]:
