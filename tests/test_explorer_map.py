@@ -121,3 +121,16 @@ def test_last_tab_closing_empties_the_simulation_caches() -> None:
     assert contacts._samples.cache_info().currsize == 0  # noqa: SLF001
     assert contacts._coarse.cache_info().currsize == 0  # noqa: SLF001
     assert cached_kit.cache_info().currsize == 0
+
+
+def test_last_tab_closing_empties_the_compiled_engine_caches() -> None:
+    """The compiled contacts keep link tables per hand (one per design change): emptied too."""
+    from app.explorer.server import drop_simulation_caches
+    from app.model.hand.model import build_hand
+    from app.sim.contacts_compiled import link_tables
+
+    hand = build_hand(15.0, 60.0)
+    link_tables(tuple(lk.shape for lk in hand.links[:3]), 1.0)
+    assert link_tables.cache_info().currsize >= 1
+    drop_simulation_caches()
+    assert link_tables.cache_info().currsize == 0

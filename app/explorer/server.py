@@ -127,11 +127,19 @@ def drop_simulation_caches() -> None:
         fn = getattr(contacts, name, None)
         if fn is not None and hasattr(fn, "cache_clear"):
             fn.cache_clear()
-    compiled = sys.modules.get("app.sim.closing_compiled")
-    for name in ("_CACHE", "_CHAIN_CACHE"):
-        cache = getattr(compiled, name, None)
-        if isinstance(cache, dict):
-            cache.clear()
+    # the compiled engine's per-object and per-hand caches (link tables: one entry per hand)
+    for mod_name, names in (
+        ("app.sim.closing_compiled", ("_CACHE", "_CHAIN_CACHE")),
+        ("app.sim.contacts_compiled", ("_SPHERES", "link_tables")),
+        ("app.sim.sdf_compiled", ("_CACHE",)),
+    ):
+        mod = sys.modules.get(mod_name)
+        for name in names:
+            cache = getattr(mod, name, None)
+            if isinstance(cache, dict):
+                cache.clear()
+            elif cache is not None and hasattr(cache, "cache_clear"):
+                cache.cache_clear()
     release_freed_memory()
 
 
