@@ -140,23 +140,10 @@ def drop_simulation_caches() -> None:
                 cache.clear()
             elif cache is not None and hasattr(cache, "cache_clear"):
                 cache.cache_clear()
-    release_freed_memory()
-
-
-def release_freed_memory() -> bool:
-    """Give the heap's freed pages back to the system (glibc ``malloc_trim``): freed Python
-    and numpy memory otherwise stays in the process's arenas, and RSS stays at its peak after
-    the tabs close. Returns whether it ran (False off glibc)."""
-    import ctypes
     import gc
 
     gc.collect()
-    try:
-        libc = ctypes.CDLL("libc.so.6")
-        libc.malloc_trim(0)
-    except (OSError, AttributeError):
-        return False
-    return True
+    release_memory()
 
 
 def workers_from_env() -> int | None:
