@@ -249,13 +249,7 @@ def mesh_distance(
 def link_mesh_distance(shape: object, T_object_fcl: np.ndarray, pk: MeshPack, tol: float) -> float:
     """A hand link's (``CapsuleShape`` or ``BoxShape`` posed at its FCL frame) distance to the
     mesh: exact when it may be <= ``tol`` (the contact test), else a lower bound above it."""
-    from app.model.hand.geometry import BoxShape, CapsuleShape
+    from app.sim.closing_compiled import link_arrays  # the links' shape codes, in one place
 
-    R = np.ascontiguousarray(T_object_fcl[:3, :3], dtype=float)
-    t = np.ascontiguousarray(T_object_fcl[:3, 3], dtype=float)
-    if isinstance(shape, CapsuleShape):
-        prm = np.array([shape.radius, 0.5 * shape.length, 0.0])
-        return float(mesh_distance(gjk.CAPSULE, prm, R, t, pk, tol))
-    assert isinstance(shape, BoxShape), type(shape)
-    half = 0.5 * (np.asarray(shape.hi_link, float) - np.asarray(shape.lo_link, float))
-    return float(mesh_distance(gjk.BOX, np.ascontiguousarray(half), R, t, pk, tol))
+    la = link_arrays([shape], T_object_fcl[None])
+    return float(mesh_distance(la.typ[0], la.prm[0], la.R[0], la.t[0], pk, tol))

@@ -14,7 +14,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import fcl
 import numpy as np
@@ -159,8 +159,8 @@ class HandKit:
                 return got, counter[0]
         link_distance = None
         if settings.closing.engine == "compiled":
-            pack_of = getattr(obj, "mesh_pack", None)
-            pack: Any = pack_of() if callable(pack_of) else None
+            arrays = _object_arrays(obj, settings.closing)
+            pack = arrays.mesh if arrays is not None else None
             if pack is not None:  # an imported mesh: its distance field, not FCL's BVH
                 from app.sim.mesh_distance import link_mesh_distance
 
