@@ -176,6 +176,14 @@ def link_arrays(shapes: Sequence[object], T_fcl: np.ndarray) -> ObstacleArrays:
     return _arrays(rows)
 
 
+def link_mesh_distance(shape: object, T_object_fcl: np.ndarray, pk: MeshPack, tol: float) -> float:
+    """A hand link's (``CapsuleShape`` or ``BoxShape`` posed at its FCL frame) distance to an
+    imported mesh (``mesh_distance``): exact when it may be <= ``tol`` (the contact test),
+    else a lower bound above it."""
+    la = link_arrays([shape], T_object_fcl[None])
+    return float(mesh_distance(la.typ[0], la.prm[0], la.R[0], la.t[0], pk, tol))
+
+
 # ------------------------------------------------------------------- compiled kernels
 
 

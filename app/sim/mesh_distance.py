@@ -244,12 +244,3 @@ def mesh_distance(
                                                      tri_c, tri_r, stamp, qid, margin, best,
                                                      tverts)  # fmt: skip
     return best
-
-
-def link_mesh_distance(shape: object, T_object_fcl: np.ndarray, pk: MeshPack, tol: float) -> float:
-    """A hand link's (``CapsuleShape`` or ``BoxShape`` posed at its FCL frame) distance to the
-    mesh: exact when it may be <= ``tol`` (the contact test), else a lower bound above it."""
-    from app.sim.closing_compiled import link_arrays  # the links' shape codes, in one place
-
-    la = link_arrays([shape], T_object_fcl[None])
-    return float(mesh_distance(la.typ[0], la.prm[0], la.R[0], la.t[0], pk, tol))

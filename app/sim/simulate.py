@@ -162,7 +162,7 @@ class HandKit:
             arrays = _object_arrays(obj, settings.closing)
             pack = arrays.mesh if arrays is not None else None
             if pack is not None:  # an imported mesh: its distance field, not FCL's BVH
-                from app.sim.mesh_distance import link_mesh_distance
+                from app.sim.closing_compiled import link_mesh_distance
 
                 tol = settings.contact.contact_tol_mm
                 link_distance = lambda sh, T: link_mesh_distance(sh, T, pack, tol)  # noqa: E731
