@@ -2,6 +2,8 @@
 
 - GH closings per second per core and FCL queries per closing (base stage and thumb stage)
 - seconds for one design over all six objects (4,260 GHs), cold store, local process pool
+  (fresh pool: its start-up included), and for a new design on a running pool (the
+  explorer's case)
 - the same on a warm store (everything cached)
 - with --full: seconds for the 28-design sweep, cold store
 - peak RSS of this process and its workers
@@ -26,6 +28,7 @@ from app.model.objects import OBJECT_KEYS, load_object
 from app.quality.judge import judge
 from app.quality.settings import SimSettings
 from app.runs.executors import LocalExecutor
+from app.runs.palm_cache import palm_table
 from app.runs.store import ResultStore
 from app.runs.sweep import run_sweep
 from app.sim.closing import ClosingStats
@@ -55,6 +58,11 @@ def per_core_rates(sample: int, engine: str) -> None:
     tj = ts = 0.0
     ns = 0
     cpu = 0.0  # process CPU time of base + thumb + judge (robust to a busy machine)
+    cpu_new = 0.0  # the same on a known palm stage
+    palms = {key: palm_table(key, s) for key in OBJECT_KEYS}
+    for t in palms.values():  # the palm stages of the sample (computed when not cached)
+        for i in range(0, len(t), sample):
+            t.get(i)
     for key in OBJECT_KEYS:
         obj, hy = load_object(key), cached_hypotheses(key)
         for i in range(0, len(hy), sample):
@@ -68,6 +76,13 @@ def per_core_rates(sample: int, engine: str) -> None:
             judge(g, obj, s, 0)
             t3 = time.perf_counter()
             cpu += time.process_time() - c0
+            # a new design whose hypothesis' palm stage is known (the palm table)
+            palm = palms[key].get(i)
+            c0 = time.process_time()
+            judge(
+                simulate_thumb(kit, obj, simulate_base(kit, obj, hy, i, s, palm=palm), s), obj, s, 0
+            )
+            cpu_new += time.process_time() - c0
             for k in siblings:  # the other MCP angles of c = 0 on the same base (CMC memo)
                 simulate_thumb(k, obj, base, s)
             t4 = time.perf_counter()
@@ -95,11 +110,20 @@ def per_core_rates(sample: int, engine: str) -> None:
     print(f"judge (force closure + grasp type)   : {nb / tj:8.1f} GH/s per core")
     print(f"full closing (base + thumb + judge)  : {nb / (tb + tt + tj):8.1f} GH/s per core")
     print(f"the same in CPU time                 : {1e3 * cpu / nb:8.2f} ms per GH")
+    print(f"a new design on known palm stages    : {1e3 * cpu_new / nb:8.2f} ms per GH (CPU)")
 
 
-def timed_sweep(designs: list[ThumbDesign], workers: int, store_path: Path, engine: str) -> float:
+def timed_sweep(
+    designs: list[ThumbDesign],
+    workers: int,
+    store_path: Path,
+    engine: str,
+    executor: LocalExecutor | None = None,
+) -> float:
+    """Seconds to sweep ``designs`` over the six objects into ``store_path``; on a fresh
+    process pool (its start-up included) unless ``executor`` is given."""
     with ResultStore(store_path) as store:
-        ex = LocalExecutor(workers)
+        ex = executor or LocalExecutor(workers)
         try:
             t0 = time.perf_counter()
             res = run_sweep(
@@ -112,7 +136,8 @@ def timed_sweep(designs: list[ThumbDesign], workers: int, store_path: Path, engi
             )
             dt = time.perf_counter() - t0
         finally:
-            ex.close()
+            if executor is None:
+                ex.close()
     assert res is not None
     return dt
 
@@ -143,6 +168,18 @@ def main() -> None:
         print(f"one design, six objects ({n} GHs), cold : {dt:8.1f} s  ({args.workers} workers)")
         dt = timed_sweep([ThumbDesign(0, 45)], args.workers, tmp / "one.sqlite", args.engine)
         print(f"the same, warm store                    : {dt:8.2f} s")
+        # the explorer's case: its worker pool is running (objects loaded) when a new design
+        # comes; the store has nothing of that design
+        pool = LocalExecutor(args.workers)
+        try:
+            timed_sweep([ThumbDesign(0, 45)], args.workers, tmp / "pool.sqlite", args.engine, pool)
+            for d in (ThumbDesign(30, 75), ThumbDesign(20, 50)):
+                dt = timed_sweep([d], args.workers, tmp / "pool.sqlite", args.engine, pool)
+                print(
+                    f"new design {d.cmc_deg:g}/{d.mcp_deg:g} on a running pool, cold  : {dt:8.1f} s"
+                )
+        finally:
+            pool.close()
         if args.full:
             dt = timed_sweep(published_designs(), args.workers, tmp / "all.sqlite", args.engine)
             print(

@@ -15,7 +15,9 @@ from app.sim.contacts import ContactSettings
 
 #: Bumped whenever a code change alters simulated outcomes: part of the settings key, so a
 #: store never serves results of an older engine as current.
-ENGINE_VERSION = 6  # 6: a contact patch is every link sample within tol (no 30 mm disc about
+ENGINE_VERSION = 7  # 7: the approach stops at the later of the thumbless hand's and the open
+# thumb's first contacts, each found by its own steps (the thumbless part is shared by designs)
+# 6: a contact patch is every link sample within tol (no 30 mm disc about
 # the nearest point), thinned in the link frame
 # 5: base stage always by the MCP-0 kit (results independent of grouping)
 # 4: stage stop refined by false position (gap within 0.001 mm of tol)

@@ -17,15 +17,18 @@ from app.quality.judge import judge
 from app.quality.outcome import GraspOutcome
 from app.quality.settings import SimSettings
 from app.runs.keys import design_key, set_object_key
+from app.runs.palm_cache import palm_table
 from app.runs.store import ResultStore
 from app.sim.bruteforce import ALL_FINGERS, BruteForceHypotheses
 from app.sim.hypothesis_sets import hypotheses_of
 from app.sim.simulate import (
     BaseGrasp,
+    PalmGrasp,
     base_kit,
     base_mcp_deg,
     cached_kit,
     simulate_base,
+    simulate_palm,
     simulate_thumb,
 )
 
@@ -66,6 +69,7 @@ def run_task(
     kits = [cached_kit(*d.as_dict().values()) for d in task.designs]  # type: ignore[arg-type]
     out: list[tuple[int, str, GraspOutcome]] = []
     bf = isinstance(hyps, BruteForceHypotheses)
+    palms = None if bf else palm_table(task.object_name, s)
     for i in task.gh:
         if on_hypothesis is not None:
             on_hypothesis(i)
@@ -73,15 +77,17 @@ def run_task(
         # stage per (CMC angle, tilt), shared by every MCP angle (docs/cost-model.md), always
         # computed by the same kit (``base_kit``) whatever designs share the task
         bases: dict[tuple[float, str, float], BaseGrasp] = {}
+        # the thumbless hand: one per hypothesis for every design (the process' palm table)
+        palm: PalmGrasp | None = palms.get(i) if palms is not None else None
+        h, fingers = (hyps.approach_line(i), ALL_FINGERS) if bf else (hyps, None)
         for di, (d, kit) in enumerate(zip(task.designs, kits, strict=True)):
             open_thumb = (d.cmc_deg, d.cmc_tilt, base_mcp_deg(d))
             base = bases.get(open_thumb)
             if base is None:
                 bk = base_kit(d)
-                if isinstance(hyps, BruteForceHypotheses):
-                    base = simulate_base(bk, obj, hyps.approach_line(i), i, s, fingers=ALL_FINGERS)
-                else:
-                    base = simulate_base(bk, obj, hyps, i, s)
+                if palm is None:
+                    palm = simulate_palm(bk, obj, h, i, s, fingers=fingers)
+                base = simulate_base(bk, obj, h, i, s, fingers=fingers, palm=palm)
                 bases[open_thumb] = base
             g = simulate_thumb(kit, obj, base, s)
             o = judge(g, obj, s, base.queries + g.queries)

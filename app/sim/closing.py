@@ -393,6 +393,7 @@ def approach(
     settings: ClosingSettings,
     stats: ClosingStats,
     arrays: tuple[ObstacleArrays, ObstacleArrays] | None = None,
+    floor_mm: float | None = None,
 ) -> float | None:
     """Slide the hand along the ray toward the object until first contact.
 
@@ -401,8 +402,11 @@ def approach(
     links that take part. Returns s at first contact (gap ≤ stop tolerance), or None if the
     hand passes the target by ``start_mm`` without touching. ``arrays``: (bodies, pieces) as
     flat arrays for the compiled engine (used when ``settings.engine == 'compiled'``).
+    ``floor_mm``: give up (None) once s falls below it (default ``-start_mm``); the steps
+    before are the same, so a contact above the floor is found exactly as without it.
     """
     tol = settings.stop_tol_mm
+    floor = -start_mm if floor_mm is None else max(-start_mm, floor_mm)
     if settings.engine == "compiled" and arrays is not None:
         from app.sim.closing_compiled import approach_compiled
 
@@ -419,6 +423,7 @@ def approach(
             tol,
             settings.max_steps,
             counters,
+            floor,
         )
         stats.queries += int(counters[0])
         stats.steps += int(counters[1])
@@ -453,7 +458,7 @@ def approach(
         step = gap - 0.5 * tol  # pure translation: every point moves at unit speed
         s -= step
         lb -= step
-        if s < -start_mm:
+        if s < floor:
             return None
     stats.capped += 1
     return s

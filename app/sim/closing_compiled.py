@@ -508,9 +508,10 @@ def approach_kernel(
     exact_below: float,
     counters: np.ndarray,
     mesh: MeshPack,
+    floor: float,
 ) -> tuple[float, int]:
-    """``app.sim.closing.approach``: (s, status) with status 0 contact, 1 passed the target
-    (no contact), 2 capped by ``max_steps``."""
+    """``app.sim.closing.approach``: (s, status) with status 0 contact, 1 fell below
+    ``floor`` without contact (passed the target), 2 capped by ``max_steps``."""
     s = start_mm
     B, P = len(btyp), len(otyp)
     lb = np.full((B, P), -np.inf)
@@ -549,7 +550,7 @@ def approach_kernel(
         for b in range(B):
             for p in range(P):
                 lb[b, p] -= step
-        if s < -start_mm:
+        if s < floor:
             return s, 1
     counters[2] += 1
     return s, 2
@@ -638,8 +639,10 @@ def approach_compiled(
     tol: float,
     max_steps: int,
     counters: np.ndarray,
+    floor: float | None = None,
 ) -> tuple[float, int]:
-    """``approach`` on the compiled engine: (s, status) as ``approach_kernel``."""
+    """``approach`` on the compiled engine: (s, status) as ``approach_kernel``; ``floor``
+    defaults to ``-start_mm``."""
     offset = np.asarray(R_object_palm, float) @ np.asarray(approach_point_palm, float)
     return approach_kernel(
         body_arrays.typ, body_arrays.prm, np.ascontiguousarray(T_palm_bodies, float),
@@ -647,4 +650,5 @@ def approach_compiled(
         np.asarray(target_object, float), offset,
         pieces.typ, pieces.prm, pieces.R, pieces.t, pieces.vstart, pieces.verts,
         float(start_mm), float(tol), int(max_steps), EXACT_BELOW_MM, counters, _pack(pieces),
+        float(-start_mm if floor is None else floor),
     )  # fmt: skip

@@ -12,6 +12,7 @@ final posture.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import TYPE_CHECKING, Protocol
@@ -94,21 +95,27 @@ class HandKit:
         self.reach = np.array([_reach(sh) for sh in self.shapes])
         T_open = hand.link_poses(self.q_open)
         # approach bodies: every link of the open hand (the thumb too)
-        self.approach_idx = list(range(len(self.names)))
-        self.T_palm_approach = np.stack([T_open[i] @ self.T_link_fcl[i] for i in self.approach_idx])
-        self._approach_arrays: ObstacleArrays | None = None
+        self.T_palm_approach = np.stack(
+            [T_open[i] @ self.T_link_fcl[i] for i in range(len(T_open))]
+        )
+        self._approach_arrays: dict[tuple[int, ...], ObstacleArrays] = {}
         #: the links a thumb closes against (self-collision): palm and long fingers
         self.non_thumb = [j for j, n in enumerate(self.names) if not n.startswith("thumb")]
+        #: the thumb's links
+        self.thumb_links = [j for j, n in enumerate(self.names) if n.startswith("thumb")]
         self._thumb_templates: dict[int, tuple[ObstacleArrays, ObstacleArrays]] = {}
 
-    def approach_arrays(self) -> ObstacleArrays:
-        """The approach bodies' shapes as arrays (compiled engine; poses are per call)."""
-        if self._approach_arrays is None:
+    def approach_arrays(self, idx: tuple[int, ...]) -> ObstacleArrays:
+        """The open-hand links ``idx``' shapes as arrays (compiled engine; poses are per
+        call)."""
+        got = self._approach_arrays.get(idx)
+        if got is None:
             from app.sim.closing_compiled import link_arrays
 
-            shapes = [self.shapes[j] for j in self.approach_idx]
-            self._approach_arrays = link_arrays(shapes, np.tile(np.eye(4), (len(shapes), 1, 1)))
-        return self._approach_arrays
+            shapes = [self.shapes[j] for j in idx]
+            got = link_arrays(shapes, np.tile(np.eye(4), (len(shapes), 1, 1)))
+            self._approach_arrays[idx] = got
+        return got
 
     def thumb_obstacle_arrays(self, obj_arr: ObstacleArrays, T_fcl: np.ndarray) -> ObstacleArrays:
         """The object's pieces followed by the non-thumb links posed at ``T_fcl`` (13, 4, 4)
@@ -199,6 +206,9 @@ class BaseGrasp:
     """Contacts of the palm and the long fingers."""
     queries: int
     """FCL distance queries spent."""
+    thumb_obstacles: Obstacles | None = field(default=None, repr=False, compare=False)
+    """What the thumb closes against on this base (compiled engine: arrays only, so any kit
+    of the same hand may reuse them; None: built per thumb)."""
     thumb_first_stage: dict[str, tuple[np.ndarray, StageEvent]] = field(default_factory=dict)
     """Memo of the thumb's CMC stage (sequential mode): with MCP and IP open, the thumb's
     capsules lie on the metacarpal's line whatever the MCP design angle, so every design
@@ -230,6 +240,122 @@ def closing_fingers(grasp_type: str) -> tuple[str, ...]:
     return ("thumb", "index") if grasp_type == "PP" else ("thumb",) + LONG_FINGERS
 
 
+@dataclass(frozen=True)
+class PalmGrasp:
+    """The design-independent part of one hypothesis: the thumbless hand's approach, the
+    back-off and the long fingers (docs/cost-model.md). Every design's base starts from it;
+    only a thumb that touches first during the approach moves the placement."""
+
+    start_mm: float
+    """Ray parameter where the approach starts, mm."""
+    s_mm: float
+    """Ray parameter at the first contact of the palm and long fingers, mm; NaN when they
+    pass the target without touching."""
+    T_object_palm: np.ndarray
+    """(4, 4) hand placement after the back-off (at ``start_mm`` when ``s_mm`` is NaN)."""
+    q: np.ndarray
+    """(15,) joint angles with the long fingers final and the thumb open, rad."""
+    contacts: ContactSet
+    """Contacts of the palm and the long fingers."""
+    queries: int
+    """Distance queries spent."""
+
+
+def _placement(hyps: Hypotheses, i: int, s: float, kit: HandKit) -> np.ndarray:
+    """(4, 4) T_object_palm with the approach point at ``target + s · ray``."""
+    T = np.eye(4)
+    R = hyps.R_object_palm[i]
+    T[:3, :3] = R
+    T[:3, 3] = hyps.target_object + s * hyps.ray_object[i] - R @ kit.hand.approach_point_palm
+    return T
+
+
+def _approach_start(obj: GraspTarget, hyps: Hypotheses, closing: ClosingSettings) -> float:
+    """Where the approach starts on the ray: clear of the object by the approach clearance."""
+    start = float(np.linalg.norm(hyps.target_object - obj.centroid_object)) + obj.max_radius
+    return start + closing.approach_clearance_mm
+
+
+def _approach_links(
+    kit: HandKit,
+    obj: GraspTarget,
+    hyps: Hypotheses,
+    i: int,
+    idx: list[int],
+    start: float,
+    closing: ClosingSettings,
+    stats: ClosingStats,
+    floor_mm: float | None = None,
+) -> float:
+    """First contact (ray parameter, mm; NaN for none) of the open hand's links ``idx``;
+    NaN too when there is none above ``floor_mm`` (``approach``)."""
+    obj_arr = _object_arrays(obj, closing)
+    s = approach(
+        [kit.moving[j] for j in idx],
+        kit.T_palm_approach[idx],
+        hyps.R_object_palm[i],
+        hyps.ray_object[i],
+        hyps.target_object,
+        kit.hand.approach_point_palm,
+        list(obj.collision_objects()),
+        start,
+        closing,
+        stats,
+        None if obj_arr is None else (kit.approach_arrays(tuple(idx)), obj_arr),
+        floor_mm,
+    )
+    return math.nan if s is None else s
+
+
+def _close_long_fingers(
+    kit: HandKit,
+    obj: GraspTarget,
+    hyps: Hypotheses,
+    i: int,
+    s_contact: float,
+    settings: SimulationSettings,
+    stats: ClosingStats,
+    fingers: tuple[str, ...] | None,
+) -> tuple[np.ndarray, np.ndarray, ContactSet, int]:
+    """Back off from the first contact at ``s_contact`` by the standoff, close the long
+    fingers; (T_object_palm, q, contacts of palm + long fingers, their queries)."""
+    closing = settings.closing
+    T = _placement(hyps, i, s_contact + float(hyps.standoff_mm[i]), kit)
+    q = kit.q_open.copy()
+    pieces = list(obj.collision_objects())
+    obstacles = Obstacles(pieces, len(pieces), arrays=_object_arrays(obj, closing))
+    for finger in fingers if fingers is not None else closing_fingers(obj.spec.grasp_type):
+        if finger == "thumb":
+            continue
+        ch = kit.chains[finger]
+        q[list(ch.joints)] = close_finger(ch, kit.bodies(finger), T, obstacles, closing, stats)
+    cs, n_q = kit.contacts(obj, T @ kit.hand.link_poses(q), kit.non_thumb, settings)
+    return T, q, cs, n_q
+
+
+def simulate_palm(
+    kit: HandKit,
+    obj: GraspTarget,
+    hyps: Hypotheses,
+    i: int,
+    settings: SimulationSettings,
+    stats: ClosingStats | None = None,
+    fingers: tuple[str, ...] | None = None,
+) -> PalmGrasp:
+    """The thumbless hand: approach, back off by the standoff, close the long fingers; the
+    contacts of palm + long fingers. Independent of the thumb design (any kit of the hand
+    file gives the same numbers). ``fingers`` as in ``simulate_base``."""
+    stats = stats if stats is not None else ClosingStats()
+    start = _approach_start(obj, hyps, settings.closing)
+    q0 = stats.queries
+    s = _approach_links(kit, obj, hyps, i, kit.non_thumb, start, settings.closing, stats)
+    if math.isnan(s):
+        T = _placement(hyps, i, start, kit)
+        return PalmGrasp(start, s, T, kit.q_open.copy(), ContactSet(), stats.queries - q0)
+    T, q, cs, n_q = _close_long_fingers(kit, obj, hyps, i, s, settings, stats, fingers)
+    return PalmGrasp(start, s, T, q, cs, stats.queries - q0 + n_q)
+
+
 def simulate_base(
     kit: HandKit,
     obj: GraspTarget,
@@ -238,58 +364,47 @@ def simulate_base(
     settings: SimulationSettings,
     stats: ClosingStats | None = None,
     fingers: tuple[str, ...] | None = None,
+    palm: PalmGrasp | None = None,
 ) -> BaseGrasp:
     """Approach, back off by the standoff, close the long fingers; contacts of palm + fingers.
 
-    ``fingers``: the fingers that close (default ``closing_fingers`` of the object's grasp
-    type; the brute-force set closes all). The thumb, if listed, is left to ``simulate_thumb``.
+    The approach stops at the first contact of the open hand, thumb included: the later of
+    the palm-and-long-fingers' first contact (``palm``, computed when not given) and the open
+    thumb's (this kit's CMC angle). Only when the thumb touches first are the long fingers
+    closed again from its placement. ``fingers``: the fingers that close (default
+    ``closing_fingers`` of the object's grasp type; the brute-force set closes all). The
+    thumb, if listed, is left to ``simulate_thumb``.
     """
     closing = settings.closing
     stats = stats if stats is not None else ClosingStats()
-    pieces = list(obj.collision_objects())
-    spec = obj.spec
-    centroid = obj.centroid_object
-    R = hyps.R_object_palm[i]
-    ray = hyps.ray_object[i]
-    start = float(np.linalg.norm(hyps.target_object - centroid)) + obj.max_radius
-    start += closing.approach_clearance_mm
-    obj_arr = _object_arrays(obj, closing)
-    s = approach(
-        [kit.moving[j] for j in kit.approach_idx],
-        kit.T_palm_approach,
-        R,
-        ray,
-        hyps.target_object,
-        kit.hand.approach_point_palm,
-        pieces,
-        start,
-        closing,
-        stats,
-        None if obj_arr is None else (kit.approach_arrays(), obj_arr),
-    )
-    T = np.eye(4)
-    T[:3, :3] = R
-    q = kit.q_open.copy()
-    if s is None:
-        T[:3, 3] = hyps.target_object + start * ray - R @ kit.hand.approach_point_palm
-        return BaseGrasp(False, T, q, ContactSet(), stats.queries)
-    s += float(hyps.standoff_mm[i])
-    T[:3, 3] = hyps.target_object + s * ray - R @ kit.hand.approach_point_palm
-    obstacles = Obstacles(list(pieces), len(pieces), arrays=obj_arr)
-    for finger in fingers if fingers is not None else closing_fingers(spec.grasp_type):
-        if finger == "thumb":
-            continue
-        ch = kit.chains[finger]
-        q[list(ch.joints)] = close_finger(ch, kit.bodies(finger), T, obstacles, closing, stats)
-    T_links = T @ kit.hand.link_poses(q)
-    idx = [j for j, n in enumerate(kit.names) if not n.startswith("thumb")]
-    cs, n_q = kit.contacts(obj, T_links, idx, settings)
-    base = BaseGrasp(True, T, q, cs, stats.queries + n_q)
+    n_stages = len(stats.stages) if stats.stages is not None else 0
+    if palm is None:
+        palm = simulate_palm(kit, obj, hyps, i, settings, stats, fingers)
+    mark, queries = stats.queries, palm.queries
+    start = palm.start_mm
+    # the open thumb matters only if it touches before the palm and long fingers do
+    floor = None if math.isnan(palm.s_mm) else palm.s_mm
+    s_thumb = _approach_links(kit, obj, hyps, i, kit.thumb_links, start, closing, stats, floor)
+    T, q, cs, s = palm.T_object_palm, palm.q, palm.contacts, palm.s_mm
+    if not math.isnan(s_thumb) and (math.isnan(s) or s_thumb > s):
+        s = s_thumb  # the open thumb touches first: the hand stops there
+        if stats.stages is not None:
+            del stats.stages[n_stages:]  # the long fingers close again from here
+        T, q, cs, n_q = _close_long_fingers(kit, obj, hyps, i, s, settings, stats, fingers)
+        queries += n_q
+    queries += stats.queries - mark
+    if math.isnan(s):
+        return BaseGrasp(False, T, q.copy(), ContactSet(), queries)
+    if stats.stages is not None:
+        stats.approach_s = (start, s)
+    obstacles = _thumb_obstacles(kit, obj, T, q, closing)
+    shared = obstacles if obstacles.arrays is not None else None  # FCL bodies are the kit's
+    base = BaseGrasp(True, T, q.copy(), cs, queries, shared)
     if closing.mode == "sequential":
         # the thumb's CMC stage, shared by every MCP angle, is closed here by this (the base)
         # kit, so that it never depends on which design happens to close its thumb first
         thumb, st = kit.chains["thumb"], ClosingStats()
-        close_finger(thumb, kit.bodies("thumb"), T, _thumb_obstacles(kit, obj, T, q, closing),
+        close_finger(thumb, kit.bodies("thumb"), T, obstacles,
                      closing, st, base.thumb_first_stage, first_stage_only=True)  # fmt: skip
         base = dataclasses.replace(base, queries=base.queries + st.queries)
     return base
@@ -341,7 +456,7 @@ def simulate_thumb(
         return Grasp(T, q, base.contacts, n_main, False, 0)
     closing = settings.closing
     stats = stats if stats is not None else ClosingStats()
-    obstacles = _thumb_obstacles(kit, obj, T, q, closing)
+    obstacles = base.thumb_obstacles or _thumb_obstacles(kit, obj, T, q, closing)
     q[list(thumb.joints)] = close_finger(
         thumb, kit.bodies("thumb"), T, obstacles, closing, stats, base.thumb_first_stage
     )
