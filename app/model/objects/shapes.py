@@ -15,7 +15,10 @@ Every builder takes the ``[shape]`` table of a data file (mm) and returns a
 
 from __future__ import annotations
 
+import hashlib
 import math
+import os
+import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -157,6 +160,23 @@ def polygon_sdf_2d(q: np.ndarray, verts: np.ndarray, real_edge: np.ndarray) -> n
     return np.where(inside, -dist, dist)
 
 
+#: Bump when ``polygon_sdf_2d`` or the table's layout changes (cached tables are then unused).
+TABLE_VERSION = 1
+
+
+def _save_atomic(path: Path, values: np.ndarray) -> None:
+    """Write ``values`` to ``path`` (.npy) through a temp file and a rename, so that processes
+    building the same table at once never leave a torn file; an unwritable folder is fine."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npy.tmp")
+        with os.fdopen(fd, "wb") as fh:
+            np.save(fh, values)
+        os.replace(tmp, path)
+    except OSError:
+        pass
+
+
 class PolygonSdfTable:
     """``polygon_sdf_2d`` tabulated on a regular grid, bilinearly interpolated.
 
@@ -191,10 +211,35 @@ class PolygonSdfTable:
         return vals.reshape(self.shape)
 
     def grid(self) -> np.ndarray:
-        """The tabulated values (built on first use); ``lo``/``shape`` are set with it."""
+        """The tabulated values (built on first use, or read from the disk cache:
+        ``table_cache_path``); ``lo``/``shape`` are set with it."""
         if self._grid is None:
-            self._grid = self._build()
+            path = self.table_cache_path()
+            try:
+                g = np.load(path, allow_pickle=False)
+                self.lo = self.verts.min(0) - self.pad
+                self.shape = (
+                    np.ceil((self.verts.max(0) + self.pad - self.lo) / self.h).astype(int) + 1
+                )
+                if g.dtype != np.float64 or g.shape != tuple(self.shape):
+                    raise ValueError("table of another shape")
+                self._grid = g
+            except (OSError, ValueError):
+                self._grid = self._build()
+                _save_atomic(path, self._grid)
         return self._grid
+
+    def table_cache_path(self) -> Path:
+        """``$XDG_CACHE_HOME/handbench/tables/<hash>.npy``: the table, keyed by the polygon,
+        its real edges, the spacing, the padding and ``TABLE_VERSION`` (building the pear's
+        table takes seconds in every new process; reading it, milliseconds). The values are
+        stored as float64, so a read table equals a built one bit for bit."""
+        h = hashlib.sha256()
+        h.update(np.ascontiguousarray(self.verts, np.float64).tobytes())
+        h.update(np.ascontiguousarray(self.real, np.bool_).tobytes())
+        h.update(f"{self.h!r}|{self.pad!r}|{TABLE_VERSION}".encode())
+        base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+        return Path(base) / "handbench" / "tables" / f"{h.hexdigest()[:32]}.npy"
 
     def __call__(self, q: np.ndarray) -> np.ndarray:
         g = self.grid()
