@@ -20,10 +20,11 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install -q -e '.[test]'
 	@touch $(STAMP)
 
-# setup also warms numba's on-disk cache of the compiled engine (its first call compiles
-# for about a minute; every later process loads the machine code in under a second)
+# setup also warms numba's on-disk cache of the compiled kernels, engine and force closure
+# (their first call compiles for about a minute; every later process loads the machine code
+# in under a second)
 setup: $(STAMP)
-	$(PY) -m app.sim.warm
+	$(PY) -m app.quality.warm
 
 chromium:
 	@if [ -x $(CHROMIUM) ]; then :; \
@@ -48,7 +49,7 @@ typecheck: $(STAMP)
 
 # (warm first: tests that time worker pools must not time numba compiling in every worker)
 pytest: $(STAMP) chromium
-	$(PY) -m app.sim.warm
+	$(PY) -m app.quality.warm
 	$(PY) -m pytest -q
 
 test: lint typecheck pytest
