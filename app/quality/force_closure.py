@@ -35,7 +35,7 @@ solves (~0.8 ms), and builds the qhull hull only where ε is wanted (Q_C1, ≤ 1
 object and design). ``tests/test_force_closure.py`` checks the two against each other and
 against an LP on random and analytic contact sets. ``evaluate_fc`` decides with
 ``positively_spans_compiled``: the same tests in one numba call
-(``force_closure_compiled``, ~0.06 ms), with this scipy path as its fallback where a
+(``force_closure_compiled``, ~0.1 ms per grasp), with this scipy path as its fallback where a
 number lies too close to its threshold (``tests/test_force_closure_compiled.py``).
 """
 
@@ -206,7 +206,7 @@ def positively_spans_compiled(
     n_edges: int = 8,
 ) -> bool:
     """``positively_spans(primitive_wrenches(p, n, centroid, r, mu, n_edges))``, the same
-    verdict from one numba call (``force_closure_compiled.fc_kernel``, ~10× faster); that
+    verdict from one numba call (``force_closure_compiled.fc_kernel``, ~9× faster); that
     scipy path itself runs only where the kernel is too close to a threshold to be sure
     (counted in ``COMPILED_STATS``).
 
