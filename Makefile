@@ -20,12 +20,12 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install -q -e '.[test]'
 	@touch $(STAMP)
 
-# setup also warms numba's on-disk cache of the compiled engine (its first call compiles
-# for about a minute; every later process loads the machine code in under a second), and
-# caches the built-in objects' palm stages, which every design shares (docs/cost-model.md;
-# about 10 s once, then a second to check)
+# setup also warms numba's on-disk cache of the compiled kernels, engine and force closure
+# (their first call compiles for about a minute; every later process loads the machine code
+# in under a second), and caches the built-in objects' palm stages, which every design
+# shares (docs/cost-model.md; about 10 s once, then a second to check)
 setup: $(STAMP)
-	$(PY) -m app.sim.warm
+	$(PY) -m app.quality.warm
 	$(PY) -m app.runs.palm_cache
 
 chromium:
@@ -51,7 +51,7 @@ typecheck: $(STAMP)
 
 # (warm first: tests that time worker pools must not time numba compiling in every worker)
 pytest: $(STAMP) chromium
-	$(PY) -m app.sim.warm
+	$(PY) -m app.quality.warm
 	$(PY) -m pytest -q
 
 test: lint typecheck pytest

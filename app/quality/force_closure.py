@@ -33,7 +33,10 @@ So the benchmark DECIDES FC with ``positively_spans`` (below), which is the same
 — origin strictly inside conv(W) ⇔ W positively spans R^6 — by 7 non-negative least-squares
 solves (~0.8 ms), and builds the qhull hull only where ε is wanted (Q_C1, ≤ 100 grasps per
 object and design). ``tests/test_force_closure.py`` checks the two against each other and
-against an LP on random and analytic contact sets.
+against an LP on random and analytic contact sets. ``evaluate_fc`` decides with
+``positively_spans_compiled``: the same tests in one numba call
+(``force_closure_compiled``, ~0.1 ms per grasp), with this scipy path as its fallback where a
+number lies too close to its threshold (``tests/test_force_closure_compiled.py``).
 """
 
 from __future__ import annotations
@@ -48,6 +51,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from app.errors import SettingsError
 from app.model.contact_set import ContactSet
+from app.quality import force_closure_compiled as fcc
 
 #: rank(W) = 6 needs σ_6 > RANK_REL_TOL · σ_1 (singular values of the (M, 6) wrench matrix).
 RANK_REL_TOL = 1e-9
@@ -188,6 +192,45 @@ def positively_spans(W: np.ndarray) -> bool:
     return True
 
 
+#: Calls of ``positively_spans_compiled`` in this process, and how many ran the scipy path
+#: (in all and by the kernel's UNDECIDED code).
+COMPILED_STATS: dict[str, int] = {"calls": 0, "fallbacks": 0}
+
+
+def positively_spans_compiled(
+    p: np.ndarray,
+    n: np.ndarray,
+    centroid: np.ndarray,
+    r: float,
+    mu: float = 0.4,
+    n_edges: int = 8,
+) -> bool:
+    """``positively_spans(primitive_wrenches(p, n, centroid, r, mu, n_edges))``, the same
+    verdict from one numba call (``force_closure_compiled.fc_kernel``, ~9× faster); that
+    scipy path itself runs only where the kernel is too close to a threshold to be sure
+    (counted in ``COMPILED_STATS``).
+
+    Args:
+        p: (K, 3) contact points, mm.
+        n: (K, 3) unit normals into the object.
+        centroid: (3,) the object's centroid, mm.
+        r: the object's largest radius, mm.
+        mu: friction coefficient.
+        n_edges: edges per cone.
+    """
+    p = np.ascontiguousarray(p, dtype=np.float64).reshape(-1, 3)
+    n = np.ascontiguousarray(n, dtype=np.float64).reshape(-1, 3)
+    c = np.ascontiguousarray(centroid, dtype=np.float64).reshape(3)
+    code = fcc.fc_kernel(p, n, c, float(r), float(mu), int(n_edges), RANK_REL_TOL, SPAN_REL_TOL)
+    COMPILED_STATS["calls"] += 1
+    if code >= 0:
+        return code == fcc.FC
+    COMPILED_STATS["fallbacks"] += 1
+    key = f"fallback {fcc.UNDECIDED_NAMES[code]}"
+    COMPILED_STATS[key] = COMPILED_STATS.get(key, 0) + 1
+    return positively_spans(primitive_wrenches(p, n, c, r, mu, n_edges))
+
+
 def is_force_closure(W: np.ndarray) -> bool:
     """True iff the origin is strictly inside conv(W) (qhull; see the module docstring).
 
@@ -250,20 +293,29 @@ def evaluate_fc(
     r: float,
     settings: FCSettings | None = None,
     with_epsilon: bool = False,
+    compiled: bool = True,
 ) -> FCResult:
-    """Force closure (``positively_spans``) and, when asked, ε by qhull (else NaN).
+    """Force closure (positive span) and, when asked, ε by qhull (else NaN).
 
     Args:
         contacts: the grasp's contact points and normals (object frame, mm).
         centroid: (3,) the object's centroid, object frame, mm.
         r: the object's largest radius, mm.
         settings: contact model (default ``FCSettings()``).
+        with_epsilon: decide FC and compute ε with the qhull hull.
+        compiled: decide FC with ``positively_spans_compiled`` (the same verdict, faster);
+            False: ``positively_spans`` on numpy's wrenches (the reference).
     """
     s = settings or FCSettings()
     if len(contacts) == 0:
         return FCResult(False, 0.0, 0)
-    W = primitive_wrenches(contacts.p_object, contacts.n_object, centroid, r, s.mu, s.n_edges)
-    if with_epsilon:
-        fc, eps = fc_and_epsilon(W)
-        return FCResult(fc, eps, len(W))
-    return FCResult(positively_spans(W), math.nan, len(W))
+    if with_epsilon or not compiled:
+        W = primitive_wrenches(contacts.p_object, contacts.n_object, centroid, r, s.mu, s.n_edges)
+        if with_epsilon:
+            fc, eps = fc_and_epsilon(W)
+            return FCResult(fc, eps, len(W))
+        return FCResult(positively_spans(W), math.nan, len(W))
+    fc = positively_spans_compiled(
+        contacts.p_object, contacts.n_object, centroid, r, s.mu, s.n_edges
+    )
+    return FCResult(fc, math.nan, len(contacts) * int(s.n_edges))
