@@ -12,7 +12,6 @@ import threading
 import time
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
-from multiprocessing import get_context
 from pathlib import Path
 
 import viser
@@ -29,26 +28,20 @@ WORKERS_ENV = "HANDBENCH_EXPLORER_WORKERS"
 """Processes for the S_GAS computation; 0 runs it in a thread of the server."""
 
 
-def _ignore_sigint() -> None:
-    """Pool workers leave Ctrl-C to the server (which then stops them): no traceback per
-    worker in the terminal."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
 class _SharedLocalExecutor(LocalExecutor):
     """A process pool shared by the tabs (pool creation guarded against a race); closing
     it ends its workers at once instead of waiting for their running tasks."""
 
-    def __init__(self, workers: int | None = None) -> None:
-        super().__init__(workers)
+    def __init__(self, workers: int | None = None, warm_objects: Sequence[str] = ()) -> None:
+        super().__init__(workers, warm_objects)
         self._create_lock = threading.Lock()
 
     def _get_pool(self) -> ProcessPoolExecutor:
         with self._create_lock:
             if self._pool is None:
-                self._pool = ProcessPoolExecutor(
-                    self.workers, mp_context=get_context("spawn"), initializer=_ignore_sigint
-                )
+                # workers leave Ctrl-C to the server (which then stops them): no traceback
+                # per worker in the terminal
+                self._pool = self._new_pool(ignore_sigint=True)
             return self._pool
 
     def worker_pids(self) -> list[int]:
@@ -172,8 +165,12 @@ class ExplorerServer:
             load_object(k)  # UnknownObjectError lists the valid keys
         workers = workers_from_env() if workers is None else workers
         self.executor: Executor = (
-            InlineExecutor() if workers == 0 else _SharedLocalExecutor(workers)
+            InlineExecutor() if workers == 0 else _SharedLocalExecutor(workers, objs)
         )
+        if isinstance(self.executor, LocalExecutor):
+            # the workers load the objects and the engine while the first tab opens, so its
+            # first S_GAS estimate does not wait for them
+            self.executor.start()
         self.store = ResultStore(Path(store_path) if store_path else default_store_path())
         self.viser = viser.ViserServer(host=host, port=port, label="handbench", verbose=False)
         shown_host = "127.0.0.1" if host in ("0.0.0.0", "::") else host

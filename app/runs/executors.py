@@ -35,6 +35,34 @@ def run_task_marked(task: Task, marker_dir: str) -> list[tuple[int, str, GraspOu
     return out
 
 
+def init_worker(object_names: Sequence[str], ignore_sigint: bool = False) -> None:
+    """Pool worker start-up: optionally leave Ctrl-C to the parent, then load what every task
+    on ``object_names`` needs (objects, hypotheses, palm tables, the compiled kernels and
+    their tables) by simulating one touching hypothesis of each, so that the first task of
+    every object does not pay it (the explorer's first estimate)."""
+    if ignore_sigint:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    from app.model.design import ThumbDesign
+    from app.quality.settings import SimSettings
+    from app.runs.palm_cache import palm_table
+
+    s = SimSettings()
+    for name in object_names:
+        try:
+            table = palm_table(name, s)
+            touching = next(
+                (i for i in range(min(len(table), 64)) if table.get(i).contacts.p_object.size), 0
+            )
+            run_task(Task(name, (touching,), (ThumbDesign(),), s))
+        except Exception:  # a warm-up only: the object's own tasks report what is wrong
+            continue
+
+
+def _started() -> int:
+    """A no-op task: makes the pool start its workers (and run their start-up)."""
+    return os.getpid()
+
+
 def _describe_exit(code: int | None) -> str:
     if code is None:
         return "it vanished"
@@ -78,15 +106,31 @@ class LocalExecutor(Executor):
     worker_fn: Any = staticmethod(run_task_marked)
     """The function the workers run, ``(task, marker_dir) -> results`` (tests swap it)."""
 
-    def __init__(self, workers: int | None = None) -> None:
+    def __init__(self, workers: int | None = None, warm_objects: Sequence[str] = ()) -> None:
         self.workers = workers or os.cpu_count() or 1
+        #: objects every worker loads when it starts (``init_worker``); none: on first use
+        self.warm_objects = tuple(warm_objects)
         self._pool: ProcessPoolExecutor | None = None
         self._markers = tempfile.mkdtemp(prefix="handbench-workers-")
 
+    def _new_pool(self, ignore_sigint: bool = False) -> ProcessPoolExecutor:
+        return ProcessPoolExecutor(
+            self.workers,
+            mp_context=get_context("spawn"),
+            initializer=init_worker,
+            initargs=(self.warm_objects, ignore_sigint),
+        )
+
     def _get_pool(self) -> ProcessPoolExecutor:
         if self._pool is None:
-            self._pool = ProcessPoolExecutor(self.workers, mp_context=get_context("spawn"))
+            self._pool = self._new_pool()
         return self._pool
+
+    def start(self) -> None:
+        """Start the workers now (in the background) rather than at the first task."""
+        pool = self._get_pool()
+        for _ in range(self.workers):
+            pool.submit(_started)
 
     def run(self, tasks, cancel):  # type: ignore[override]
         pool = self._get_pool()
