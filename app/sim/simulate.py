@@ -51,6 +51,21 @@ def _object_arrays(obj: GraspTarget, closing: ClosingSettings) -> ObstacleArrays
     return object_arrays(obj)
 
 
+def _object_spheres(obj: GraspTarget) -> np.ndarray:
+    """(P, 4) a bounding sphere (centre, radius; object frame) of each of the object's
+    collision pieces, radius inf where there is none (an imported mesh): the closing stages'
+    first lower bounds, so that far pieces are not queried. The same numbers on both engines
+    (they come from the pieces' arrays), so the engines keep taking the same steps."""
+    from app.sim.closing_compiled import object_arrays
+    from app.sim.contacts_compiled import piece_spheres
+    from app.sim.mesh_distance import MESH
+
+    arr = object_arrays(obj)
+    out = piece_spheres(arr).copy()
+    out[arr.typ == MESH, 3] = np.inf
+    return out
+
+
 class PalmarRule(Protocol):
     """The palmar-contact threshold (``GraspTypeSettings`` has it)."""
 
@@ -323,7 +338,9 @@ def _close_long_fingers(
     T = _placement(hyps, i, s_contact + float(hyps.standoff_mm[i]), kit)
     q = kit.q_open.copy()
     pieces = list(obj.collision_objects())
-    obstacles = Obstacles(pieces, len(pieces), arrays=_object_arrays(obj, closing))
+    obstacles = Obstacles(
+        pieces, len(pieces), spheres=_object_spheres(obj), arrays=_object_arrays(obj, closing)
+    )
     for finger in fingers if fingers is not None else closing_fingers(obj.spec.grasp_type):
         if finger == "thumb":
             continue
@@ -427,6 +444,7 @@ def _thumb_obstacles(
     mask = np.ones((3, len(objs)), bool)
     mask[0, len(pieces)] = False  # the metacarpal sits in the thenar: never against the palm
     spheres = np.full((len(objs), 4), np.inf)
+    spheres[: len(pieces)] = _object_spheres(obj)
     spheres[len(pieces) :, :3] = T_fcl[:, :3, 3]
     spheres[len(pieces) :, 3] = kit.reach[others]
     arrays = None if obj_arr is None else kit.thumb_obstacle_arrays(obj_arr, T_fcl)
