@@ -140,3 +140,15 @@ def test_palm_key_changes_with_the_settings() -> None:
     other = dataclasses.replace(S, contact=dataclasses.replace(S.contact, contact_tol_mm=0.7))
     assert palm_cache.palm_key("washer", S) != palm_cache.palm_key("washer", other)
     assert palm_cache.palm_key("washer", S) != palm_cache.palm_key("chips_can", S)
+
+
+def test_worker_start_up_loads_the_objects_and_never_fails() -> None:
+    """``init_worker`` (the explorer's pool start-up) leaves the object's palm table loaded,
+    and an object that cannot load does not break the worker (its tasks report it)."""
+    from app.runs.executors import init_worker
+
+    palm_cache.clear_tables()
+    init_worker(("washer", "no_such_object"))
+    table = palm_cache._TABLES[("washer", S.key())]
+    assert any(r is not None for r in table._rows)
+    palm_cache.clear_tables()
