@@ -279,6 +279,8 @@ class MapPanel:
         self._lock = threading.Lock()
         self._dirty: bool | None = None  # None: clean; False: redraw; True: reload + redraw
         self._busy = False
+        self.render_thread: threading.Thread | None = None
+        """The latest redraw thread (None before the first)."""
         self._base: MapImage | None = None
         self._scene_base: MapImage | None = None
         self.renders = 0
@@ -326,7 +328,8 @@ class MapPanel:
             if self._busy:
                 return
             self._busy = True
-        threading.Thread(target=self._drain, name="map-render", daemon=True).start()
+        self.render_thread = threading.Thread(target=self._drain, name="map-render", daemon=True)
+        self.render_thread.start()
 
     def _drain(self) -> None:
         while True:

@@ -27,6 +27,9 @@ OBJECTS_ENV = "HANDBENCH_EXPLORER_OBJECTS"
 """Comma list of object keys for the S_GAS panel and the map (default: all six)."""
 WORKERS_ENV = "HANDBENCH_EXPLORER_WORKERS"
 """Processes for the S_GAS computation; 0 runs it in a thread of the server."""
+SESSION_JOIN_S = 60.0
+"""How long a tab's disconnect waits for its threads (a running S_GAS task, the first scene)
+to end before the server releases memory."""
 
 
 def _ignore_sigint() -> None:
@@ -137,8 +140,8 @@ class ExplorerServer:
     Once listening, the server loads the warm engine in a background thread (``preload``;
     ``engine_ready`` is set when done, and ``log`` gets an 'engine ready in X s' line), so
     the first tab does not wait for the compiled kernels and the objects' data. When the last
-    tab closes, what the tabs built per hand is dropped and the warm engine is kept: the
-    server returns to the level it had once ready."""
+    tab closes (and its threads have ended), what the tabs built per hand is dropped and the
+    warm engine is kept: the server returns to the level it had once ready."""
 
     def __init__(
         self,
@@ -231,6 +234,11 @@ class ExplorerServer:
             s = self.sessions.pop(client.client_id, None)
         if s is not None:
             s.close()
+            # what its threads still compute goes into the shared caches: release after them
+            if not s.join(SESSION_JOIN_S):
+                msg = f"a closed tab's threads still ran after {SESSION_JOIN_S:g} s"
+                print(f"handbench explorer: {msg}; what they cache stays until the next release",
+                      flush=True)  # fmt: skip
             del s
             self._release(idle_only=False)
 

@@ -107,6 +107,7 @@ class Session:
         self.outcome: GraspOutcome | None = None
         self._closed = False
         self._player: threading.Thread | None = None
+        self._last_player: threading.Thread | None = None
         self._player_cancel = threading.Event()
         self._req_lock = threading.Lock()
         self._req: ThumbDesign | None = None
@@ -123,7 +124,8 @@ class Session:
         )  # fmt: skip
         self._probe_key = url_state.new_probe_key()
         self._probe = self.client.gui.add_html(url_state.probe_html(self._probe_key))
-        threading.Thread(target=self._start, name="session-start", daemon=True).start()
+        self._start_thread = threading.Thread(target=self._start, name="session-start", daemon=True)
+        self._start_thread.start()
 
     # ------------------------------------------------------------------ set-up
     @property
@@ -271,6 +273,8 @@ class Session:
                 self._apply_design(req)
 
     def _apply_design(self, design: ThumbDesign) -> None:
+        if self._closed:  # a closed tab computes nothing more (its link may arrive late)
+            return
         t0 = time.perf_counter()
         self._stop_player()
         if design != self.design:
@@ -358,6 +362,8 @@ class Session:
     # ------------------------------------------------------------------ grasp
     def _show_final(self) -> None:
         """Simulate the selected GH at the current design and draw its final grasp."""
+        if self._closed:
+            return
         i = self.gh
         s = self.settings
         d = self.design
@@ -400,6 +406,7 @@ class Session:
                 target=self._play, args=(rep, self.hand, cancel), name="replay", daemon=True
             )
             self._player.start()
+            self._last_player = self._player
 
     def _play(self, rep: Replay, hand: Hand, cancel: threading.Event) -> None:
         """Draw the frames at REPLAY_HZ. Each frame is drawn under the session lock after a
@@ -525,3 +532,16 @@ class Session:
         if self._ghost_timer is not None:
             self._ghost_timer.cancel()
         self.worker.close()
+
+    def join(self, timeout: float) -> bool:
+        """After ``close``: wait until this tab's threads have ended (the link reader and the
+        first scene, the S_GAS worker, the replay, the map render), at most ``timeout``
+        seconds; whether they all did. A thread still computing when the tab closed would
+        otherwise refill the shared caches after the server emptied them."""
+        t_end = time.monotonic() + timeout
+        threads = [self._start_thread, self._last_player, self.map_panel.render_thread]
+        for t in threads:
+            if t is not None and t is not threading.current_thread():
+                t.join(max(0.0, t_end - time.monotonic()))
+        done = self.worker.join(max(0.0, t_end - time.monotonic()))
+        return done and not any(t is not None and t.is_alive() for t in threads)
