@@ -391,3 +391,45 @@ def test_click_on_scene_map_selects_design(server: ExplorerServer, browser: Any)
         assert sm.picks == [(30.0, 75.0)]
     finally:
         page.close()
+
+
+def test_tab_opened_while_the_engine_loads_and_release_keeps_it(browser: Any) -> None:
+    """A tab opened while the server still loads its engine (in the background, once
+    listening) works; when it closes, even half-way through drawing its first scene, the
+    server drops every hand the tabs built and keeps the warm engine it loaded at start."""
+    from app.model.objects import load_object
+    from app.sim import closing_compiled
+    from app.sim.contacts_compiled import link_tables
+    from app.sim.simulate import cached_kit
+
+    srv = ExplorerServer(
+        "127.0.0.1", 0, BUILD / "preload.sqlite", objects=OBJECTS, workers=0,
+        shots_dir=BUILD / "shots", debounce_s=NO_SGAS_S,
+    )  # fmt: skip
+    hand_caches = (cached_kit.cache_info, link_tables.cache_info)
+
+    def released() -> bool:
+        return not srv.sessions and all(info().currsize == 0 for info in hand_caches)
+
+    try:
+        page, s = open_tab(srv, browser, "?cmc=15&mcp=60")  # at once: the preload runs
+        assert (s.design.cmc_deg, s.design.mcp_deg) == (15.0, 60.0)
+        assert s.link_error is None
+        assert srv.engine_ready.wait(120)
+        page.close()
+        wait_until(released, 90, "the release after the last tab closed")
+        # a tab closed while it draws its first scene (its link read, the grasp not yet drawn)
+        page = browser.new_page()
+        page.goto(srv.url + "/?cmc=30&mcp=75", wait_until="commit")
+        s = wait_until(lambda: next(iter(srv.sessions.values()), None), 60, "a session")
+        t_end = time.monotonic() + 60
+        while s.design.cmc_deg != 30.0 and not s.ready.is_set() and time.monotonic() < t_end:
+            time.sleep(0.005)
+        page.close()
+        wait_until(released, 90, "the release after the second tab closed")
+        time.sleep(1.0)  # nothing of the closed tab refills the caches afterwards
+        assert released()
+        obj = load_object(OBJECTS[0])
+        assert closing_compiled._CACHE[id(obj)][0] is obj  # noqa: SLF001 - the warm set
+    finally:
+        srv.stop()

@@ -134,3 +134,106 @@ def test_last_tab_closing_empties_the_compiled_engine_caches() -> None:
     assert link_tables.cache_info().currsize >= 1
     drop_simulation_caches()
     assert link_tables.cache_info().currsize == 0
+
+
+def _warm_set_held(key: str) -> bool:
+    """The compiled engine's per-object caches hold ``key``'s arrays, packed signed distance
+    and piece spheres."""
+    from app.model.objects import load_object
+    from app.sim import closing_compiled, contacts_compiled, sdf_compiled
+
+    obj = load_object(key)
+    arr = closing_compiled._CACHE.get(id(obj))  # noqa: SLF001
+    prog = sdf_compiled._CACHE.get(id(obj))  # noqa: SLF001
+    if arr is None or prog is None or arr[0] is not obj or prog[0] is not obj:
+        return False
+    return id(arr[1]) in contacts_compiled._SPHERES  # noqa: SLF001
+
+
+def _hand_caches_empty() -> bool:
+    from app.model.hand import model as hand_model
+    from app.sim import closing_compiled, contacts
+    from app.sim.contacts_compiled import link_tables
+    from app.sim.simulate import cached_kit
+
+    return (
+        cached_kit.cache_info().currsize == 0
+        and link_tables.cache_info().currsize == 0
+        and contacts._samples.cache_info().currsize == 0  # noqa: SLF001
+        and not closing_compiled._CHAIN_CACHE  # noqa: SLF001
+        and hand_model._visual_meshes.cache_info().currsize == 0  # noqa: SLF001
+    )
+
+
+def test_last_tab_closing_keeps_the_warm_engine() -> None:
+    """What the server loads at start (``load_engine``: the objects' arrays, signed distances
+    and piece spheres) is what the release keeps: the hands' caches go, and the arrays of an
+    object outside the kept set."""
+    from app.explorer.server import drop_simulation_caches
+    from app.sim.resident import load_engine
+
+    load_engine(["chips_can", "washer"])
+    assert _warm_set_held("chips_can") and _warm_set_held("washer")
+    assert not _hand_caches_empty()  # the warm-up simulation built one hand
+    drop_simulation_caches(["chips_can"])
+    assert _warm_set_held("chips_can")
+    assert not _warm_set_held("washer")
+    assert _hand_caches_empty()
+
+
+def test_maps_are_drawn_on_one_thread() -> None:
+    """Matplotlib caches fonts per thread (open files and FreeType faces): maps drawn from
+    many threads (one per tab) draw on the one map thread, so the font cache does not grow."""
+    import threading
+
+    from matplotlib import font_manager
+
+    from app.explorer.map_data import TOTAL, MapPoint
+    from app.explorer.panel_map import render_base
+    from app.quality.scores import DesignScore, ObjectScore
+
+    score = DesignScore({"chips_can": ObjectScore(10, 5, 4)}, {"chips_can": "PP"})
+    pts = [MapPoint(c, m, score, "store") for c, m in ((0.0, 45.0), (30.0, 60.0), (15.0, 90.0))]
+    fonts = font_manager._get_font  # pyright: ignore[reportAttributeAccessIssue]  # noqa: SLF001
+    render_base(pts, TOTAL)
+    before = fonts.cache_info().currsize
+    threads = [threading.Thread(target=lambda: render_base(pts, TOTAL)) for _ in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert fonts.cache_info().currsize == before
+
+
+def test_icon_list_covers_the_explorer() -> None:
+    """``server.ICONS`` (read once at start) lists every icon the explorer's panels use."""
+    import re
+
+    import viser
+
+    from app.explorer.server import ICONS
+
+    src = Path(__file__).resolve().parents[1] / "app" / "explorer"
+    used = {m for p in src.glob("*.py") for m in re.findall(r"Icon\.([A-Z_0-9]+)", p.read_text())}
+    assert {getattr(viser.Icon, n) for n in used} == set(ICONS)
+
+
+def test_server_loads_the_engine_at_start(tmp_path: Path) -> None:
+    """The server loads the warm engine in a thread once it listens, says so, and then holds
+    the warm set and no hand: the level the last tab closing returns to."""
+    from app.explorer.server import ExplorerServer
+
+    lines: list[str] = []
+    srv = ExplorerServer(
+        "127.0.0.1", 0, tmp_path / "s.sqlite", objects=["chips_can"], workers=0,
+        log=lines.append,
+    )  # fmt: skip
+    try:
+        assert srv._preload is not None and srv._preload.name == "engine-preload"  # noqa: SLF001
+        assert srv.engine_ready.wait(120)
+        assert srv.engine_load_s is not None
+        assert lines and lines[-1].startswith("engine ready in ")
+        assert _warm_set_held("chips_can")
+        assert _hand_caches_empty()
+    finally:
+        srv.stop()

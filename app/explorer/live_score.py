@@ -386,6 +386,13 @@ class ScoreWorker:
             self._wake.set()
         self._thread.join(timeout=5.0)
 
+    def join(self, timeout: float) -> bool:
+        """Wait (after ``close``) for the thread to end, at most ``timeout`` s; whether it did
+        (a task that was running when cancelled finishes first)."""
+        if self._thread is not threading.current_thread():
+            self._thread.join(timeout)
+        return not self._thread.is_alive()
+
     def _loop(self) -> None:
         while True:
             self._wake.wait()

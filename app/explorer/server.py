@@ -10,22 +10,25 @@ import os
 import signal
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import viser
 
-from app.explorer.session import ExplorerContext, Session
+from app.explorer.session import ExplorerContext, Session, warm_up
 from app.model.objects import OBJECT_KEYS, load_object
 from app.runs.executors import Executor, InlineExecutor, LocalExecutor
 from app.runs.store import ResultStore, default_store_path
-from app.sim.simulate import cached_kit
+from app.sim.resident import drop_hand_caches, load_engine
 
 OBJECTS_ENV = "HANDBENCH_EXPLORER_OBJECTS"
 """Comma list of object keys for the S_GAS panel and the map (default: all six)."""
 WORKERS_ENV = "HANDBENCH_EXPLORER_WORKERS"
 """Processes for the S_GAS computation; 0 runs it in a thread of the server."""
+SESSION_JOIN_S = 60.0
+"""How long a tab's disconnect waits for its threads (a running S_GAS task, the first scene)
+to end before the server releases memory."""
 
 
 class _SharedLocalExecutor(LocalExecutor):
@@ -82,6 +85,28 @@ def release_memory() -> None:
         pass
 
 
+M_TRIM_THRESHOLD = -1
+"""glibc's ``mallopt`` parameter number of the trim threshold (malloc.h)."""
+
+
+def tune_allocator(trim_threshold: int = 128 * 1024) -> None:
+    """Let glibc return the free top of every thread's heap to the OS (a no-op elsewhere).
+
+    glibc raises its trim threshold (up to 64 MB) each time a large block is freed, and the
+    free top of a thread's heap below that threshold stays resident: ``malloc_trim`` releases
+    free pages inside a heap, not the top of the heaps of threads other than the main one.
+    Tabs compute in viser's callback threads and their own, so after every 8 tabs the server
+    kept a few MB more. A fixed threshold (which also keeps glibc's default mmap threshold,
+    128 KiB: larger blocks are mapped and unmapped directly) returns it. Called by
+    ``serve``, for the process's lifetime."""
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6").mallopt(M_TRIM_THRESHOLD, int(trim_threshold))
+    except (OSError, AttributeError):
+        pass
+
+
 def warm_up_encoders() -> None:
     """Encode one tiny PNG and JPEG the way viser does, in the calling thread.
 
@@ -102,39 +127,39 @@ def warm_up_encoders() -> None:
         _encode_image_binary(tiny, fmt, jpeg_quality=None)  # type: ignore[arg-type]
 
 
-def drop_simulation_caches() -> None:
-    """Empty the per-process simulation caches that hold the tabs' hands.
+ICONS = (
+    viser.Icon.HAND_FINGER, viser.Icon.PLAYER_PLAY, viser.Icon.MAP, viser.Icon.SHARE,
+    viser.Icon.POINTER, viser.Icon.REFRESH, viser.Icon.CAMERA, viser.Icon.UPLOAD,
+)  # fmt: skip
+"""The icons of the explorer's tabs and buttons (``tests/test_explorer_map.py`` checks the
+list against the source)."""
+
+
+def warm_up_icons() -> None:
+    """Read the explorer's icons once. Viser reads an icon's SVG from its zip of 4,285 icons,
+    parsing the whole zip directory (~3 MB of Python objects) per icon until its small cache
+    has it; tabs opening at once did that in parallel, once per tab, for each icon."""
+    try:
+        from viser._icons import svg_from_icon  # noqa: PLC2701 - the cache viser reads
+    except ImportError:  # a viser without it: nothing to warm
+        return
+    for icon in ICONS:
+        svg_from_icon(icon)
+
+
+def drop_simulation_caches(keep: Sequence[str] = ()) -> None:
+    """Empty the per-process simulation caches that hold the tabs' hands, keep the warm engine
+    of the objects ``keep`` (``app.sim.resident``), and return the freed heap to the OS.
 
     Every hand a tab builds (one per design change) has new link shapes, and the contact
     code caches each shape's surface samples and their k-d tree (``lru_cache`` of 512 shapes,
     held by the shape object): with 8 tabs opened and closed the server's RSS grew ~15 MB a
-    round until those caches were full. The kits (``cached_kit``) and, when loaded, the
-    compiled engine's arrays go too. Called when the last tab closes; the next tab refills
-    what it uses."""
-    import sys
-
-    from app.sim import contacts
-
-    cached_kit.cache_clear()
-    for name in ("_samples", "_coarse"):  # private caches of app.sim.contacts
-        fn = getattr(contacts, name, None)
-        if fn is not None and hasattr(fn, "cache_clear"):
-            fn.cache_clear()
-    # the compiled engine's per-object and per-hand caches (link tables: one entry per hand)
-    for mod_name, names in (
-        ("app.sim.closing_compiled", ("_CACHE", "_CHAIN_CACHE")),
-        ("app.sim.contacts_compiled", ("_SPHERES", "link_tables")),
-        ("app.sim.sdf_compiled", ("_CACHE",)),
-    ):
-        mod = sys.modules.get(mod_name)
-        for name in names:
-            cache = getattr(mod, name, None)
-            if isinstance(cache, dict):
-                cache.clear()
-            elif cache is not None and hasattr(cache, "cache_clear"):
-                cache.cache_clear()
+    round until those caches were full. The kits (``cached_kit``), the compiled engine's
+    per-hand arrays and the arrays of objects outside ``keep`` go too. Called when the last
+    tab closes; the next tab refills what it uses."""
     import gc
 
+    drop_hand_caches(keep)
     gc.collect()
     release_memory()
 
@@ -145,7 +170,14 @@ def workers_from_env() -> int | None:
 
 
 class ExplorerServer:
-    """The viser server and the sessions of the connected tabs."""
+    """The viser server and the sessions of the connected tabs.
+
+    Once listening, the server loads the warm engine in a background thread (``preload``;
+    ``engine_ready`` is set when done, and ``log`` gets an 'engine ready in X s' line), so
+    the first tab does not wait for the compiled kernels, the objects' data and the code of
+    its first scene. When the last tab closes (and its threads have ended), what the tabs
+    built per hand is dropped and the warm engine is kept: the server returns to the level
+    it had once ready."""
 
     def __init__(
         self,
@@ -158,6 +190,8 @@ class ExplorerServer:
         shots_dir: str | Path | None = None,
         debounce_s: float = 0.3,
         reference_dir: str | Path | None = None,
+        preload: bool = True,
+        log: Callable[[str], None] | None = None,
     ) -> None:
         warm_up_encoders()
         objs = tuple(objects) if objects else _objects_from_env()
@@ -190,6 +224,45 @@ class ExplorerServer:
         self._lock = threading.Lock()
         self.viser.on_client_connect(self._connect)
         self.viser.on_client_disconnect(self._disconnect)
+        self.warm_keys: tuple[str, ...] = tuple(dict.fromkeys((self.ctx.default_object, *objs)))
+        """Objects whose warm engine the server loads at start and keeps (``app.sim.resident``):
+        the default object and those of the S_GAS panel and the map."""
+        self.engine_ready = threading.Event()
+        """Set once the warm engine is loaded (or its loading failed or was not asked for)."""
+        self.engine_load_s: float | None = None
+        self._log = log
+        self._stopping = threading.Event()
+        self._preload: threading.Thread | None = None
+        if preload:  # the server is listening already: the page is served meanwhile
+            self._preload = threading.Thread(
+                target=self._load_engine, name="engine-preload", daemon=True
+            )
+            self._preload.start()
+        else:
+            self.engine_ready.set()
+
+    def _load_engine(self) -> None:
+        """Load the warm engine (compiled kernels, the objects' meshes, hypotheses, arrays and
+        signed distances), then what a tab's first scene loads on first use (the icons, the
+        quality checks, the map's drawing code and fonts: ``session.warm_up``), in the
+        background, so that the first tab does not wait for it. A tab opened meanwhile works:
+        it loads what it needs itself (numba's dispatchers and the caches are thread-safe; a
+        value computed twice is computed equal)."""
+        t0 = time.perf_counter()
+        try:
+            load_engine(self.warm_keys, cancel=self._stopping)
+            if not self._stopping.is_set():
+                warm_up_icons()
+                warm_up(self.ctx)  # the first scene's other code and the map
+        except Exception as e:  # noqa: BLE001 - the tabs load what they need themselves
+            msg = f"engine preload failed ({type(e).__name__}: {e}); tabs load it on demand"
+        else:
+            dt = self.engine_load_s = time.perf_counter() - t0
+            msg = f"engine ready in {dt:.1f} s ({', '.join(self.warm_keys)})"
+        self._release(idle_only=True)  # the level a last tab closing returns to
+        self.engine_ready.set()
+        if self._log is not None and not self._stopping.is_set():
+            self._log(msg)
 
     def _connect(self, client: viser.ClientHandle) -> None:
         s = Session(client, self.ctx)
@@ -206,13 +279,25 @@ class ExplorerServer:
             s = self.sessions.pop(client.client_id, None)
         if s is not None:
             s.close()
+            # what its threads still compute goes into the shared caches: release after them
+            if not s.join(SESSION_JOIN_S):
+                msg = f"a closed tab's threads still ran after {SESSION_JOIN_S:g} s"
+                print(f"handbench explorer: {msg}; what they cache stays until the next release",
+                      flush=True)  # fmt: skip
             del s
-            import gc
+            self._release(idle_only=False)
 
-            with self._lock:
-                idle = not self.sessions
-            if idle:  # no tab left: drop what the tabs' hands left in the simulation caches
-                drop_simulation_caches()
+    def _release(self, idle_only: bool) -> None:
+        """Collect garbage and return freed heap to the OS; with no tab left, also drop what
+        the tabs' hands left in the simulation caches (the warm engine stays). ``idle_only``:
+        nothing at all while a tab is open."""
+        import gc
+
+        with self._lock:
+            idle = not self.sessions
+        if idle:
+            drop_simulation_caches(self.warm_keys)
+        elif not idle_only:
             gc.collect()  # sessions sit in reference cycles (handles <-> callbacks)
             release_memory()
 
@@ -229,6 +314,9 @@ class ExplorerServer:
 
     def stop(self) -> None:
         """Close every session, the executor, the store and the server."""
+        self._stopping.set()
+        if self._preload is not None:  # stops after its current step
+            self._preload.join(timeout=10.0)  # (a daemon: a cold numba compile is not awaited)
         with self._lock:
             ss = list(self.sessions.values())
             self.sessions.clear()
@@ -249,7 +337,11 @@ def serve(
 ) -> None:
     """Run the explorer until Ctrl-C or SIGTERM; either stops everything it started (the
     sessions' workers, the process pool, the share tunnel, the server)."""
-    srv = ExplorerServer(host, port, store_path, objects=objects, workers=workers)
+    tune_allocator()
+    srv = ExplorerServer(
+        host, port, store_path, objects=objects, workers=workers,
+        log=lambda msg: print(msg, flush=True),
+    )  # fmt: skip
     stop = threading.Event()
 
     def on_signal(signum: int, _frame: object) -> None:

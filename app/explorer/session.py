@@ -17,11 +17,12 @@ import viser
 from app.errors import HandbenchError
 from app.explorer import url_state
 from app.explorer.input_commit import commit_script_html
-from app.explorer.live_score import ScoreWorker
+from app.explorer.live_score import ScoreWorker, read_snapshot
+from app.explorer.map_data import TOTAL, map_points
 from app.explorer.page_toasts import toast_script_html
 from app.explorer.panel_design import DesignPanel
 from app.explorer.panel_import import ImportPanel
-from app.explorer.panel_map import MapPanel
+from app.explorer.panel_map import MapPanel, render_base, with_star
 from app.explorer.panel_replay import ReplayPanel, outcome_markdown
 from app.explorer.panel_score import ScorePanel
 from app.explorer.panel_share import SharePanel, request_share_url
@@ -85,6 +86,22 @@ class Timings:
     """Design change: handler start until the re-simulated grasp was sent."""
 
 
+def warm_up(ctx: ExplorerContext) -> None:
+    """Compute, without a tab, what a new tab computes for its first scene: the default
+    design's grasp of the first GH of the default object (simulated and judged), the design's
+    stored S_GAS and the design map. What that loads on first use stays loaded for every tab
+    (the quality checks' code, the shipped reference table, the map's drawing code and fonts);
+    the server calls this at start so that its first tab does not wait for it."""
+    settings = SimSettings()
+    obj, hyps = load_object(ctx.default_object), cached_hypotheses(ctx.default_object)
+    kit = HandKit(build_hand(BASELINE.cmc_deg, BASELINE.mcp_deg, cmc_tilt=BASELINE.cmc_tilt))
+    rep = replay(kit, obj, hyps, 0, settings, base_kit=base_kit(BASELINE))
+    judge(rep.grasp, obj, settings, rep.base.queries + rep.grasp.queries)
+    read_snapshot(ctx.store, BASELINE, ctx.objects, settings, ctx.reference_dir)
+    points = map_points(ctx.store, ctx.objects, settings, BASELINE.cmc_tilt, ctx.reference_dir)
+    with_star(render_base(points, TOTAL), BASELINE.cmc_deg, BASELINE.mcp_deg)
+
+
 class Session:
     """The state and handlers of one tab."""
 
@@ -107,6 +124,7 @@ class Session:
         self.outcome: GraspOutcome | None = None
         self._closed = False
         self._player: threading.Thread | None = None
+        self._last_player: threading.Thread | None = None
         self._player_cancel = threading.Event()
         self._req_lock = threading.Lock()
         self._req: ThumbDesign | None = None
@@ -123,7 +141,8 @@ class Session:
         )  # fmt: skip
         self._probe_key = url_state.new_probe_key()
         self._probe = self.client.gui.add_html(url_state.probe_html(self._probe_key))
-        threading.Thread(target=self._start, name="session-start", daemon=True).start()
+        self._start_thread = threading.Thread(target=self._start, name="session-start", daemon=True)
+        self._start_thread.start()
 
     # ------------------------------------------------------------------ set-up
     @property
@@ -271,6 +290,8 @@ class Session:
                 self._apply_design(req)
 
     def _apply_design(self, design: ThumbDesign) -> None:
+        if self._closed:  # a closed tab computes nothing more (its link may arrive late)
+            return
         t0 = time.perf_counter()
         self._stop_player()
         if design != self.design:
@@ -358,6 +379,8 @@ class Session:
     # ------------------------------------------------------------------ grasp
     def _show_final(self) -> None:
         """Simulate the selected GH at the current design and draw its final grasp."""
+        if self._closed:
+            return
         i = self.gh
         s = self.settings
         d = self.design
@@ -400,6 +423,7 @@ class Session:
                 target=self._play, args=(rep, self.hand, cancel), name="replay", daemon=True
             )
             self._player.start()
+            self._last_player = self._player
 
     def _play(self, rep: Replay, hand: Hand, cancel: threading.Event) -> None:
         """Draw the frames at REPLAY_HZ. Each frame is drawn under the session lock after a
@@ -525,3 +549,16 @@ class Session:
         if self._ghost_timer is not None:
             self._ghost_timer.cancel()
         self.worker.close()
+
+    def join(self, timeout: float) -> bool:
+        """After ``close``: wait until this tab's threads have ended (the link reader and the
+        first scene, the S_GAS worker, the replay, the map render), at most ``timeout``
+        seconds; whether they all did. A thread still computing when the tab closed would
+        otherwise refill the shared caches after the server emptied them."""
+        t_end = time.monotonic() + timeout
+        threads = [self._start_thread, self._last_player, self.map_panel.render_thread]
+        for t in threads:
+            if t is not None and t is not threading.current_thread():
+                t.join(max(0.0, t_end - time.monotonic()))
+        done = self.worker.join(max(0.0, t_end - time.monotonic()))
+        return done and not any(t is not None and t.is_alive() for t in threads)
