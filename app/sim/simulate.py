@@ -61,6 +61,8 @@ def _object_spheres(obj: GraspTarget) -> np.ndarray:
     from app.sim.mesh_distance import MESH
 
     arr = object_arrays(obj)
+    if arr is None:  # no array description: every piece is queried
+        return np.full((len(list(obj.collision_objects())), 4), np.inf)
     out = piece_spheres(arr).copy()
     out[arr.typ == MESH, 3] = np.inf
     return out

@@ -223,10 +223,11 @@ class PolygonSdfTable:
                 )
                 if g.dtype != np.float64 or g.shape != tuple(self.shape):
                     raise ValueError("table of another shape")
-                self._grid = g
             except (OSError, ValueError):
-                self._grid = self._build()
-                _save_atomic(path, self._grid)
+                g = self._build()
+                _save_atomic(path, g)
+            self._grid = g
+            return g
         return self._grid
 
     def table_cache_path(self) -> Path:
