@@ -24,6 +24,8 @@ from app.sim.resident import drop_hand_caches, load_engine
 
 OBJECTS_ENV = "HANDBENCH_EXPLORER_OBJECTS"
 """Comma list of object keys for the S_GAS panel and the map (default: all six)."""
+#: How much lower the S_GAS workers' CPU priority is than the server's (``os.nice``).
+WORKER_NICE = 10
 WORKERS_ENV = "HANDBENCH_EXPLORER_WORKERS"
 """Processes for the S_GAS computation; 0 runs it in a thread of the server."""
 SESSION_JOIN_S = 60.0
@@ -42,9 +44,10 @@ class _SharedLocalExecutor(LocalExecutor):
     def _get_pool(self) -> ProcessPoolExecutor:
         with self._create_lock:
             if self._pool is None:
-                # workers leave Ctrl-C to the server (which then stops them): no traceback
-                # per worker in the terminal
-                self._pool = self._new_pool(ignore_sigint=True)
+                # workers leave Ctrl-C to the server (which then stops them: no traceback per
+                # worker in the terminal) and run at a lower priority, so that the server (the
+                # page's input, the panel's updates) is not starved while they use every core
+                self._pool = self._new_pool(ignore_sigint=True, nice=WORKER_NICE)
             return self._pool
 
     def worker_pids(self) -> list[int]:

@@ -35,13 +35,20 @@ def run_task_marked(task: Task, marker_dir: str) -> list[tuple[int, str, GraspOu
     return out
 
 
-def init_worker(object_names: Sequence[str], ignore_sigint: bool = False) -> None:
-    """Pool worker start-up: optionally leave Ctrl-C to the parent, then load what every task
+def init_worker(object_names: Sequence[str], ignore_sigint: bool = False, nice: int = 0) -> None:
+    """Pool worker start-up: optionally leave Ctrl-C to the parent and lower the worker's CPU
+    priority by ``nice`` (the explorer: its page stays responsive while the workers use every
+    core), then load what every task
     on ``object_names`` needs (objects, hypotheses, palm tables, the compiled kernels and
     their tables) by simulating one touching hypothesis of each, so that the first task of
     every object does not pay it (the explorer's first estimate)."""
     if ignore_sigint:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if nice:
+        try:
+            os.nice(nice)
+        except OSError:  # not allowed here: run at the parent's priority
+            pass
     from app.model.design import ThumbDesign
     from app.quality.settings import SimSettings
     from app.runs.palm_cache import palm_table
@@ -113,12 +120,12 @@ class LocalExecutor(Executor):
         self._pool: ProcessPoolExecutor | None = None
         self._markers = tempfile.mkdtemp(prefix="handbench-workers-")
 
-    def _new_pool(self, ignore_sigint: bool = False) -> ProcessPoolExecutor:
+    def _new_pool(self, ignore_sigint: bool = False, nice: int = 0) -> ProcessPoolExecutor:
         return ProcessPoolExecutor(
             self.workers,
             mp_context=get_context("spawn"),
             initializer=init_worker,
-            initargs=(self.warm_objects, ignore_sigint),
+            initargs=(self.warm_objects, ignore_sigint, nice),
         )
 
     def _get_pool(self) -> ProcessPoolExecutor:
