@@ -181,6 +181,29 @@ def test_last_tab_closing_keeps_the_warm_engine() -> None:
     assert _hand_caches_empty()
 
 
+def test_maps_are_drawn_on_one_thread() -> None:
+    """Matplotlib caches fonts per thread (open files and FreeType faces): maps drawn from
+    many threads (one per tab) draw on the one map thread, so the font cache does not grow."""
+    import threading
+
+    from matplotlib import font_manager
+
+    from app.explorer.map_data import TOTAL, MapPoint
+    from app.explorer.panel_map import render_base
+    from app.quality.scores import DesignScore, ObjectScore
+
+    score = DesignScore({"chips_can": ObjectScore(10, 5, 4)}, {"chips_can": "PP"})
+    pts = [MapPoint(c, m, score, "store") for c, m in ((0.0, 45.0), (30.0, 60.0), (15.0, 90.0))]
+    render_base(pts, TOTAL)
+    before = font_manager._get_font.cache_info().currsize  # noqa: SLF001
+    threads = [threading.Thread(target=lambda: render_base(pts, TOTAL)) for _ in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert font_manager._get_font.cache_info().currsize == before  # noqa: SLF001
+
+
 def test_server_loads_the_engine_at_start(tmp_path: Path) -> None:
     """The server loads the warm engine in a thread once it listens, says so, and then holds
     the warm set and no hand: the level the last tab closing returns to."""

@@ -7,6 +7,7 @@ import math
 import threading
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -83,13 +84,28 @@ def _labelled(points: Sequence[MapPoint]) -> list[bool]:
     return [p.cmc_deg % LABEL_GRID_DEG == 0 and p.mcp_deg % LABEL_GRID_DEG == 0 for p in points]
 
 
+_RENDERER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="map-renderer")
+"""Every map of every tab is drawn on this one thread. Pyplot is not thread-safe, and
+matplotlib caches its fonts per thread (``font_manager._get_font`` keys on the thread id; an
+entry holds open font files and their FreeType faces, up to 64 entries): maps drawn on each
+tab's own thread kept two open font files per render and the server's memory grew with
+every tab until that cache was full."""
+
+
 def render_base(
     points: Sequence[MapPoint], metric: str, size=MAP_SIZE, scale: float = 1.0
 ) -> MapImage:
     """The map of ``metric``: contours, a horizontal colour bar under the axes (clear of the
     labels), the designs, and value labels placed inside the axes (left of the point at the
     CMC 45° edge, below it at the MCP 90° edge), on a white box. ``scale`` multiplies the
-    pixels, not the layout (the in-scene map is drawn at twice the panel's resolution)."""
+    pixels, not the layout (the in-scene map is drawn at twice the panel's resolution).
+    Drawn on the map thread (``_RENDERER``); the caller waits for it."""
+    return _RENDERER.submit(_render_base, points, metric, size, scale).result()
+
+
+def _render_base(
+    points: Sequence[MapPoint], metric: str, size: tuple[int, int], scale: float
+) -> MapImage:
     w, h = size
     fig = plt.figure(figsize=(w / 100, h / 100), dpi=100 * scale)
     ax = fig.add_axes((0.15, 0.30, 0.80, 0.62))
