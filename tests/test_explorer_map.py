@@ -204,6 +204,19 @@ def test_maps_are_drawn_on_one_thread() -> None:
     assert font_manager._get_font.cache_info().currsize == before  # noqa: SLF001
 
 
+def test_icon_list_covers_the_explorer() -> None:
+    """``server.ICONS`` (read once at start) lists every icon the explorer's panels use."""
+    import re
+
+    import viser
+
+    from app.explorer.server import ICONS
+
+    src = Path(__file__).resolve().parents[1] / "app" / "explorer"
+    used = {m for p in src.glob("*.py") for m in re.findall(r"Icon\.([A-Z_0-9]+)", p.read_text())}
+    assert {getattr(viser.Icon, n) for n in used} == set(ICONS)
+
+
 def test_server_loads_the_engine_at_start(tmp_path: Path) -> None:
     """The server loads the warm engine in a thread once it listens, says so, and then holds
     the warm set and no hand: the level the last tab closing returns to."""

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import viser
 
-from app.explorer.session import ExplorerContext, Session
+from app.explorer.session import ExplorerContext, Session, warm_up
 from app.model.objects import OBJECT_KEYS, load_object
 from app.runs.executors import Executor, InlineExecutor, LocalExecutor
 from app.runs.store import ResultStore, default_store_path
@@ -112,6 +112,26 @@ def warm_up_encoders() -> None:
         _encode_image_binary(tiny, fmt, jpeg_quality=None)  # type: ignore[arg-type]
 
 
+ICONS = (
+    viser.Icon.HAND_FINGER, viser.Icon.PLAYER_PLAY, viser.Icon.MAP, viser.Icon.SHARE,
+    viser.Icon.POINTER, viser.Icon.REFRESH, viser.Icon.CAMERA, viser.Icon.UPLOAD,
+)  # fmt: skip
+"""The icons of the explorer's tabs and buttons (``tests/test_explorer_map.py`` checks the
+list against the source)."""
+
+
+def warm_up_icons() -> None:
+    """Read the explorer's icons once. Viser reads an icon's SVG from its zip of 4,285 icons,
+    parsing the whole zip directory (~3 MB of Python objects) per icon until its small cache
+    has it; tabs opening at once did that in parallel, once per tab, for each icon."""
+    try:
+        from viser._icons import svg_from_icon  # noqa: PLC2701 - the cache viser reads
+    except ImportError:  # a viser without it: nothing to warm
+        return
+    for icon in ICONS:
+        svg_from_icon(icon)
+
+
 def drop_simulation_caches(keep: Sequence[str] = ()) -> None:
     """Empty the per-process simulation caches that hold the tabs' hands, keep the warm engine
     of the objects ``keep`` (``app.sim.resident``), and return the freed heap to the OS.
@@ -139,9 +159,10 @@ class ExplorerServer:
 
     Once listening, the server loads the warm engine in a background thread (``preload``;
     ``engine_ready`` is set when done, and ``log`` gets an 'engine ready in X s' line), so
-    the first tab does not wait for the compiled kernels and the objects' data. When the last
-    tab closes (and its threads have ended), what the tabs built per hand is dropped and the
-    warm engine is kept: the server returns to the level it had once ready."""
+    the first tab does not wait for the compiled kernels, the objects' data and the code of
+    its first scene. When the last tab closes (and its threads have ended), what the tabs
+    built per hand is dropped and the warm engine is kept: the server returns to the level
+    it had once ready."""
 
     def __init__(
         self,
@@ -203,12 +224,17 @@ class ExplorerServer:
 
     def _load_engine(self) -> None:
         """Load the warm engine (compiled kernels, the objects' meshes, hypotheses, arrays and
-        signed distances) in the background, so that the first tab does not wait for it. A
-        tab opened meanwhile works: it loads what it needs itself (numba's dispatchers and the
-        caches are thread-safe; a value computed twice is computed equal)."""
+        signed distances), then what a tab's first scene loads on first use (the icons, the
+        quality checks, the map's drawing code and fonts: ``session.warm_up``), in the
+        background, so that the first tab does not wait for it. A tab opened meanwhile works:
+        it loads what it needs itself (numba's dispatchers and the caches are thread-safe; a
+        value computed twice is computed equal)."""
         t0 = time.perf_counter()
         try:
             load_engine(self.warm_keys, cancel=self._stopping)
+            if not self._stopping.is_set():
+                warm_up_icons()
+                warm_up(self.ctx)  # the first scene's other code and the map
         except Exception as e:  # noqa: BLE001 - the tabs load what they need themselves
             msg = f"engine preload failed ({type(e).__name__}: {e}); tabs load it on demand"
         else:

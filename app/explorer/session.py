@@ -17,11 +17,12 @@ import viser
 from app.errors import HandbenchError
 from app.explorer import url_state
 from app.explorer.input_commit import commit_script_html
-from app.explorer.live_score import ScoreWorker
+from app.explorer.live_score import ScoreWorker, read_snapshot
+from app.explorer.map_data import TOTAL, map_points
 from app.explorer.page_toasts import toast_script_html
 from app.explorer.panel_design import DesignPanel
 from app.explorer.panel_import import ImportPanel
-from app.explorer.panel_map import MapPanel
+from app.explorer.panel_map import MapPanel, render_base, with_star
 from app.explorer.panel_replay import ReplayPanel, outcome_markdown
 from app.explorer.panel_score import ScorePanel
 from app.explorer.panel_share import SharePanel, request_share_url
@@ -83,6 +84,22 @@ class Timings:
     """Design change: handler start until the new hand poses were sent."""
     grasp_redraw: list[float] = field(default_factory=list)
     """Design change: handler start until the re-simulated grasp was sent."""
+
+
+def warm_up(ctx: ExplorerContext) -> None:
+    """Compute, without a tab, what a new tab computes for its first scene: the default
+    design's grasp of the first GH of the default object (simulated and judged), the design's
+    stored S_GAS and the design map. What that loads on first use stays loaded for every tab
+    (the quality checks' code, the shipped reference table, the map's drawing code and fonts);
+    the server calls this at start so that its first tab does not wait for it."""
+    settings = SimSettings()
+    obj, hyps = load_object(ctx.default_object), cached_hypotheses(ctx.default_object)
+    kit = HandKit(build_hand(BASELINE.cmc_deg, BASELINE.mcp_deg, cmc_tilt=BASELINE.cmc_tilt))
+    rep = replay(kit, obj, hyps, 0, settings, base_kit=base_kit(BASELINE))
+    judge(rep.grasp, obj, settings, rep.base.queries + rep.grasp.queries)
+    read_snapshot(ctx.store, BASELINE, ctx.objects, settings, ctx.reference_dir)
+    points = map_points(ctx.store, ctx.objects, settings, BASELINE.cmc_tilt, ctx.reference_dir)
+    with_star(render_base(points, TOTAL), BASELINE.cmc_deg, BASELINE.mcp_deg)
 
 
 class Session:
