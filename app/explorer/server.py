@@ -92,6 +92,28 @@ def release_memory() -> None:
         pass
 
 
+M_TRIM_THRESHOLD = -1
+"""glibc's ``mallopt`` parameter number of the trim threshold (malloc.h)."""
+
+
+def tune_allocator(trim_threshold: int = 128 * 1024) -> None:
+    """Let glibc return the free top of every thread's heap to the OS (a no-op elsewhere).
+
+    glibc raises its trim threshold (up to 64 MB) each time a large block is freed, and the
+    free top of a thread's heap below that threshold stays resident: ``malloc_trim`` releases
+    free pages inside a heap, not the top of the heaps of threads other than the main one.
+    Tabs compute in viser's callback threads and their own, so after every 8 tabs the server
+    kept a few MB more. A fixed threshold (which also keeps glibc's default mmap threshold,
+    128 KiB: larger blocks are mapped and unmapped directly) returns it. Called by
+    ``serve``, for the process's lifetime."""
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6").mallopt(M_TRIM_THRESHOLD, int(trim_threshold))
+    except (OSError, AttributeError):
+        pass
+
+
 def warm_up_encoders() -> None:
     """Encode one tiny PNG and JPEG the way viser does, in the calling thread.
 
@@ -318,6 +340,7 @@ def serve(
 ) -> None:
     """Run the explorer until Ctrl-C or SIGTERM; either stops everything it started (the
     sessions' workers, the process pool, the share tunnel, the server)."""
+    tune_allocator()
     srv = ExplorerServer(
         host, port, store_path, objects=objects, workers=workers,
         log=lambda msg: print(msg, flush=True),
