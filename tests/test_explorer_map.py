@@ -194,14 +194,15 @@ def test_maps_are_drawn_on_one_thread() -> None:
 
     score = DesignScore({"chips_can": ObjectScore(10, 5, 4)}, {"chips_can": "PP"})
     pts = [MapPoint(c, m, score, "store") for c, m in ((0.0, 45.0), (30.0, 60.0), (15.0, 90.0))]
+    fonts = font_manager._get_font  # pyright: ignore[reportAttributeAccessIssue]  # noqa: SLF001
     render_base(pts, TOTAL)
-    before = font_manager._get_font.cache_info().currsize  # noqa: SLF001
+    before = fonts.cache_info().currsize
     threads = [threading.Thread(target=lambda: render_base(pts, TOTAL)) for _ in range(3)]
     for t in threads:
         t.start()
     for t in threads:
         t.join()
-    assert font_manager._get_font.cache_info().currsize == before  # noqa: SLF001
+    assert fonts.cache_info().currsize == before
 
 
 def test_icon_list_covers_the_explorer() -> None:
