@@ -38,10 +38,10 @@ def run_task_marked(task: Task, marker_dir: str) -> list[tuple[int, str, GraspOu
 def init_worker(object_names: Sequence[str], ignore_sigint: bool = False, nice: int = 0) -> None:
     """Pool worker start-up: optionally leave Ctrl-C to the parent and lower the worker's CPU
     priority by ``nice`` (the explorer: its page stays responsive while the workers use every
-    core), then load what every task
-    on ``object_names`` needs (objects, hypotheses, palm tables, the compiled kernels and
-    their tables) by simulating one touching hypothesis of each, so that the first task of
-    every object does not pay it (the explorer's first estimate)."""
+    core), then load what every task on ``object_names`` needs (objects, hypotheses, palm
+    tables, the compiled kernels and their tables) by simulating one touching hypothesis of
+    each, so that the first task of every object does not pay it (the explorer's first
+    estimate)."""
     if ignore_sigint:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     if nice:

@@ -111,10 +111,9 @@ class HandKit:
         self.q_open = hand.q_open
         self.reach = np.array([_reach(sh) for sh in self.shapes])
         T_open = hand.link_poses(self.q_open)
-        # approach bodies: every link of the open hand (the thumb too)
-        self.T_palm_approach = np.stack(
-            [T_open[i] @ self.T_link_fcl[i] for i in range(len(T_open))]
-        )
+        #: (16, 4, 4) every open-hand link's FCL frame in the palm frame: the approach takes
+        #: the thumbless links (``non_thumb``) and the thumb's (``thumb_links``) in turn
+        self.T_palm_approach = T_open @ self.T_link_fcl
         self._approach_arrays: dict[tuple[int, ...], ObstacleArrays] = {}
         #: the links a thumb closes against (self-collision): palm and long fingers
         self.non_thumb = [j for j, n in enumerate(self.names) if not n.startswith("thumb")]
