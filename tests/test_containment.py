@@ -23,11 +23,22 @@ CRASH_INDEX = 7
 
 
 def crash_at_index(task: Task, marker_dir: str) -> list[tuple[int, str, GraspOutcome]]:
-    """Like the real worker, but segfaults on hypothesis CRASH_INDEX (after marking it)."""
-    if CRASH_INDEX in task.gh:
-        (Path(marker_dir) / str(os.getpid())).write_text(f"{task.object_name} {CRASH_INDEX}")
-        os.kill(os.getpid(), signal.SIGSEGV)
-    return run_task_marked(task, marker_dir)
+    """The real worker, but its simulation segfaults on hypothesis CRASH_INDEX (after the
+    worker's own marking of it)."""
+    import app.runs.tasks as tasks_mod
+
+    real = tasks_mod.simulate_base
+
+    def crashing(*args, **kwargs):  # noqa: ANN202
+        if args[3] == CRASH_INDEX:
+            os.kill(os.getpid(), signal.SIGSEGV)
+        return real(*args, **kwargs)
+
+    tasks_mod.simulate_base = crashing  # type: ignore[assignment]
+    try:
+        return run_task_marked(task, marker_dir)
+    finally:
+        tasks_mod.simulate_base = real
 
 
 class CrashingExecutor(LocalExecutor):
@@ -38,7 +49,7 @@ class CrashingExecutor(LocalExecutor):
 def test_worker_crash_is_named_and_finished_tasks_stay(tmp_path: Path) -> None:
     s = SimSettings()
     d = ThumbDesign(0.0, 45.0)
-    tasks = [Task("washer", (0,), (d,), s), Task("washer", (CRASH_INDEX,), (d,), s)]
+    tasks = [Task("washer", (0,), (d,), s), Task("washer", (3, CRASH_INDEX), (d,), s)]
     ex = CrashingExecutor(workers=1)
     with ResultStore(tmp_path / "r.sqlite") as store:
         with pytest.raises(WorkerCrashError) as e:

@@ -4,6 +4,7 @@ local process pool. (The Ray executor is ``app.runs.ray_executor``.)
 
 from __future__ import annotations
 
+import mmap
 import os
 import shutil
 import signal
@@ -21,17 +22,42 @@ from app.errors import WorkerCrashError
 from app.quality.outcome import GraspOutcome
 from app.runs.tasks import Task, run_task
 
+#: Bytes of a worker's marker file: "<object> <index>" padded with blanks.
+MARKER_BYTES = 256
+
+#: This worker's marker: (directory, its file mapped into memory), opened on first use.
+_MARKER: list[tuple[str, mmap.mmap]] = []
+
+
+def _marker_map(marker_dir: str) -> mmap.mmap:
+    """``<marker_dir>/<pid>`` mapped into memory: writing it is a memory store, not a file
+    write per hypothesis (those cost ~0.25 ms each on a busy disk, a quarter of a new design's
+    time); the page stays in the page cache when the process dies, so the parent still reads
+    it."""
+    if _MARKER and _MARKER[0][0] == marker_dir:
+        return _MARKER[0][1]
+    path = Path(marker_dir) / str(os.getpid())
+    with open(path, "w+b") as f:
+        f.write(b" " * MARKER_BYTES)
+        f.flush()
+        mm = mmap.mmap(f.fileno(), MARKER_BYTES)
+    _MARKER[:] = [(marker_dir, mm)]
+    return mm
+
 
 def run_task_marked(task: Task, marker_dir: str) -> list[tuple[int, str, GraspOutcome]]:
-    """``run_task`` in a pool worker, writing ``<marker_dir>/<pid>`` ("object index") before
-    each hypothesis, so that the parent can name it if this process dies."""
-    marker = Path(marker_dir) / str(os.getpid())
+    """``run_task`` in a pool worker, keeping "<object> <index>" of the hypothesis it is on in
+    ``<marker_dir>/<pid>`` (blank between tasks), so that the parent can name it if this
+    process dies."""
+    mm = _marker_map(marker_dir)
+    name = task.object_name.encode()
 
     def mark(i: int) -> None:
-        marker.write_text(f"{task.object_name} {i}")
+        text = (b"%s %d" % (name, i))[:MARKER_BYTES]
+        mm[:] = text.ljust(MARKER_BYTES)
 
     out = run_task(task, on_hypothesis=mark)
-    marker.unlink(missing_ok=True)
+    mm[:] = b" " * MARKER_BYTES
     return out
 
 
@@ -183,8 +209,9 @@ class LocalExecutor(Executor):
         for pid, code in crashed:
             how = _describe_exit(code)
             marker = Path(self._markers) / str(pid)
-            if marker.is_file():
-                name, idx = marker.read_text().split()
+            words = marker.read_bytes().decode(errors="replace").split() if marker.is_file() else []
+            if len(words) == 2:
+                name, idx = words
                 try:
                     gh_id = hypotheses_of(name, task.hypothesis_set).ids[int(idx)]
                 except Exception:  # the id is a nicety; the index is enough
