@@ -8,8 +8,11 @@ minute on a 2-core machine when cold) and the force-closure kernel
 
 from __future__ import annotations
 
+import shutil
 import time
+from pathlib import Path
 
+from app import numba_cache_dir
 from app.quality import force_closure_compiled
 from app.sim import warm as sim_warm
 
@@ -21,8 +24,27 @@ def warm_force_closure() -> float:
     return time.perf_counter() - t0
 
 
+#: Caches of other kernel sources unused this long are removed by ``main``.
+STALE_CACHE_DAYS = 14
+
+
+def prune_stale_caches(current: Path, days: float = STALE_CACHE_DAYS) -> list[Path]:
+    """Remove the numba caches of other kernel sources (``numba_cache_dir``'s siblings) not
+    modified for ``days``; the ones removed."""
+    gone = []
+    if not current.parent.is_dir():
+        return gone
+    cutoff = time.time() - days * 86400.0
+    for d in current.parent.iterdir():
+        if d.is_dir() and d != current and d.stat().st_mtime < cutoff:
+            shutil.rmtree(d, ignore_errors=True)
+            gone.append(d)
+    return gone
+
+
 def main() -> None:
     """Warm the cache and say how long it took."""
+    prune_stale_caches(numba_cache_dir())
     dt = sim_warm.warm()
     print(f"compiled engine ready (numba cache warm): one hypothesis took {dt:.1f} s")
     dt = warm_force_closure()
