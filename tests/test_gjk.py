@@ -185,3 +185,35 @@ def test_capsule_against_cylinder_direct_route_agrees_with_gjk_and_closed_forms(
     across = gjk.shape_distance(gjk.CAPSULE, cap, R_x, np.array([15.0, 0, 0]), gjk.CYLINDER,
                                 cyl, np.eye(3), np.zeros(3), NO_VERTS, 0, 0, 0, 0)  # fmt: skip
     assert across <= 0.0
+
+
+def test_climbing_the_hull_finds_the_scanned_support() -> None:
+    """A ``POINTS`` shape with a neighbour table is searched by climbing its hull's edges:
+    distances equal the full scan's (to rounding) on random poses, for a dense hull with
+    points inside it and on a flat face (those get no neighbours); the table is symmetric."""
+    rng = np.random.default_rng(11)
+    sphere = rng.normal(size=(400, 3))
+    sphere /= np.linalg.norm(sphere, axis=1, keepdims=True)
+    pts = np.concatenate([sphere * [30, 20, 40], rng.normal(size=(50, 3)) * 3])
+    pts[:30, 2] = np.minimum(pts[:30, 2], -35.0)  # a flat cap: coplanar points
+    verts = np.ascontiguousarray(pts)
+    nbr_start, nbr = gjk.hull_neighbours(verts)
+    assert len(nbr_start) == len(verts) + 1 and nbr_start[-1] > 0
+    assert nbr_start[1] == nbr_start[0]  # point 0 lies inside the flat cap: no neighbours
+    pairs = {(i, int(j)) for i in range(len(verts)) for j in nbr[nbr_start[i] : nbr_start[i + 1]]}
+    assert all((j, i) in pairs for i, j in pairs)
+    assert np.all(np.diff(nbr_start)[400:] == 0)  # the inner points have no neighbours
+    cap = np.array([6.0, 15.0, 0.0])
+    n_far = 0
+    for _ in range(400):
+        Ra, ta = _pose(rng, 70)
+        Rb, tb = _pose(rng, 10)
+        args = (gjk.CAPSULE, cap, Ra, ta, gjk.POINTS, np.zeros(3), Rb, tb, verts)
+        climbed = gjk.shape_distance_nbr(*args, nbr_start, nbr, 0, 0, 0, len(verts))
+        scanned = gjk.shape_distance(*args, 0, 0, 0, len(verts))
+        if scanned > 1e-9:
+            n_far += 1
+            assert climbed == pytest.approx(scanned, abs=1e-9)
+        else:
+            assert climbed <= 1e-9
+    assert n_far > 200

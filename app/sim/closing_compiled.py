@@ -73,6 +73,12 @@ class ObstacleArrays:
     """(V, 3) hull vertices of the ``POINTS`` shapes, shape frames."""
     mesh: Any = None
     """The imported mesh's ``DistanceField.pack`` when a row is ``MESH`` (at most one)."""
+    nbr_start: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(1, np.int64))
+    """(V + 1,) int64: the hull-edge neighbours of vertex i are ``nbr[nbr_start[i]:
+    nbr_start[i + 1]]`` (``gjk.hull_neighbours``; large ``POINTS`` shapes only, others have
+    none and are scanned)."""
+    nbr: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, np.int64))
+    """(E,) int64 rows of ``verts``."""
 
     def __len__(self) -> int:
         return len(self.typ)
@@ -87,6 +93,8 @@ class ObstacleArrays:
             np.concatenate([self.vstart[:-1], other.vstart + self.vstart[-1]]),
             np.concatenate([self.verts, other.verts]),
             self.mesh if self.mesh is not None else other.mesh,
+            np.concatenate([self.nbr_start[:-1], other.nbr_start + self.nbr_start[-1]]),
+            np.concatenate([self.nbr, other.nbr + len(self.verts)]),
         )
 
 
@@ -96,11 +104,25 @@ def _arrays(
     n = len(rows)
     vstart = np.zeros(n + 1, np.int64)
     vs = []
+    starts: list[np.ndarray] = []  # per vertex: its number of neighbours
+    nbrs: list[np.ndarray] = []
     for i, r in enumerate(rows):
         k = 0 if r[4] is None else len(r[4])
         vstart[i + 1] = vstart[i] + k
         if r[4] is not None:
-            vs.append(np.asarray(r[4], float))
+            v = np.asarray(r[4], float)
+            vs.append(v)
+            counts, ids = np.zeros(k, np.int64), np.zeros(0, np.int64)
+            if k >= gjk.CLIMB_MIN_VERTS:
+                try:
+                    st, nb = gjk.hull_neighbours(v)
+                except Exception:  # flat or degenerate (QhullError): scanned
+                    st = None
+                if st is not None and len(nb):
+                    counts, ids = np.diff(st), nb + vstart[i]
+            starts.append(counts)
+            nbrs.append(ids)
+    cnt = np.concatenate(starts) if starts else np.zeros(0, np.int64)
     return ObstacleArrays(
         np.array([r[0] for r in rows], np.int64),
         np.array([r[1] for r in rows], float).reshape(n, 3),
@@ -108,6 +130,9 @@ def _arrays(
         np.array([r[3] for r in rows], float).reshape(n, 3),
         vstart,
         np.ascontiguousarray(np.concatenate(vs) if vs else np.zeros((0, 3))),
+        None,
+        np.concatenate([[0], np.cumsum(cnt)]).astype(np.int64),
+        np.ascontiguousarray(np.concatenate(nbrs) if nbrs else np.zeros(0, np.int64), np.int64),
     )
 
 
@@ -249,6 +274,8 @@ def _evaluate(
     ot: np.ndarray,
     vstart: np.ndarray,
     verts: np.ndarray,
+    nbr_start: np.ndarray,
+    nbr: np.ndarray,
     is_obj: np.ndarray,
     obj_hit: np.ndarray,
     self_hit: np.ndarray,
@@ -294,9 +321,9 @@ def _evaluate(
                     gjk.CAPSULE, cap_prm[k], Tk[:3, :3], Tk[:3, 3], mesh, tol + MESH_EXACT_MM
                 )
             else:
-                row[p] = gjk.shape_distance(
+                row[p] = gjk.shape_distance_nbr(
                     gjk.CAPSULE, cap_prm[k], Tk[:3, :3], Tk[:3, 3], otyp[p], oprm[p], oR[p],
-                    ot[p], verts, 0, 0, vstart[p], vstart[p + 1],
+                    ot[p], verts, nbr_start, nbr, 0, 0, vstart[p], vstart[p + 1],
                 )  # fmt: skip
             counters[0] += 1
             exact[p] = True
@@ -337,6 +364,8 @@ def advance_stage_kernel(
     ot: np.ndarray,
     vstart: np.ndarray,
     verts: np.ndarray,
+    nbr_start: np.ndarray,
+    nbr: np.ndarray,
     is_obj: np.ndarray,
     mask: np.ndarray,
     spheres: np.ndarray,
@@ -404,7 +433,8 @@ def advance_stage_kernel(
         counters[1] += 1
         g = _evaluate(
             q, placements, T_fcl, cap_prm, T_op, first, lb, tol,
-            otyp, oprm, oR, ot, vstart, verts, is_obj, obj_hit, self_hit, counters, mesh,
+            otyp, oprm, oR, ot, vstart, verts, nbr_start, nbr, is_obj, obj_hit, self_hit,
+            counters, mesh,
         )  # fmt: skip
         if (obj_hit.any() or self_hit.any()) and have_safe:
             lo_t, lo_f, hi_t, hi_f = 0.0, safe_g - tol, safe_step, g - tol
@@ -421,7 +451,8 @@ def advance_stage_kernel(
                         lb[k, j] = safe_lb[k, j] - d
                 gm = _evaluate(
                     safe_q + v * t, placements, T_fcl, cap_prm, T_op, first, lb, tol,
-                    otyp, oprm, oR, ot, vstart, verts, is_obj, o2, s2, counters, mesh,
+                    otyp, oprm, oR, ot, vstart, verts, nbr_start, nbr, is_obj, o2, s2,
+                    counters, mesh,
                 )  # fmt: skip
                 if o2.any() or s2.any():
                     hi_t, hi_f = t, gm - tol
@@ -502,6 +533,8 @@ def approach_kernel(
     ot: np.ndarray,
     vstart: np.ndarray,
     verts: np.ndarray,
+    nbr_start: np.ndarray,
+    nbr: np.ndarray,
     start_mm: float,
     tol: float,
     max_steps: int,
@@ -533,9 +566,9 @@ def approach_kernel(
                         lb[b, p] = mesh_distance(btyp[b], bprm[b], Tb[:3, :3], Tb[:3, 3], mesh,
                                                  tol + MESH_EXACT_MM)  # fmt: skip
                     else:
-                        lb[b, p] = gjk.shape_distance(
-                            btyp[b], bprm[b], Tb[:3, :3], Tb[:3, 3],
-                            otyp[p], oprm[p], oR[p], ot[p], verts, 0, 0, vstart[p], vstart[p + 1],
+                        lb[b, p] = gjk.shape_distance_nbr(
+                            btyp[b], bprm[b], Tb[:3, :3], Tb[:3, 3], otyp[p], oprm[p], oR[p],
+                            ot[p], verts, nbr_start, nbr, 0, 0, vstart[p], vstart[p + 1],
                         )  # fmt: skip
                     counters[0] += 1
         gap = np.inf
@@ -615,6 +648,7 @@ def advance_stage_compiled(
         np.asarray(q, float),
         np.asarray(v, float),
         arrays.typ, arrays.prm, arrays.R, arrays.t, arrays.vstart, arrays.verts,
+        arrays.nbr_start, arrays.nbr,
         is_obj, m, sph, float(tol), int(max_steps), REFINE_ITERS, REFINE_BAND, counters,
         _pack(arrays),
     )  # fmt: skip
@@ -649,6 +683,7 @@ def approach_compiled(
         np.ascontiguousarray(R_object_palm, float), np.asarray(ray_object, float),
         np.asarray(target_object, float), offset,
         pieces.typ, pieces.prm, pieces.R, pieces.t, pieces.vstart, pieces.verts,
+        pieces.nbr_start, pieces.nbr,
         float(start_mm), float(tol), int(max_steps), EXACT_BELOW_MM, counters, _pack(pieces),
         float(-start_mm if floor is None else floor),
     )  # fmt: skip

@@ -163,6 +163,8 @@ def contacts_kernel(
     ot: np.ndarray,
     vstart: np.ndarray,
     verts: np.ndarray,
+    nbr_start: np.ndarray,
+    nbr: np.ndarray,
     ospheres: np.ndarray,
     centroid: np.ndarray,
     r_obj: float,
@@ -204,9 +206,9 @@ def contacts_kernel(
             )
             if math.sqrt(ex * ex + ey * ey + ez * ez) - reach[l] - ospheres[p, 3] > tol:
                 continue
-            d = gjk.shape_distance(
-                ltyp[l], lprm[l], Tb[:3, :3], Tb[:3, 3],
-                otyp[p], oprm[p], oR[p], ot[p], verts, 0, 0, vstart[p], vstart[p + 1],
+            d = gjk.shape_distance_nbr(
+                ltyp[l], lprm[l], Tb[:3, :3], Tb[:3, 3], otyp[p], oprm[p], oR[p], ot[p],
+                verts, nbr_start, nbr, 0, 0, vstart[p], vstart[p + 1],
             )  # fmt: skip
             queries += 1
             if d < best:
@@ -343,7 +345,8 @@ def contacts_compiled(
     tables = link_tables(tuple(shapes), float(settings.sample_spacing_mm))
     P, N, link, pal, n, queries = contacts_kernel(
         np.ascontiguousarray(T_object_links, float), *tables,
-        arr.typ, arr.prm, arr.R, arr.t, arr.vstart, arr.verts, piece_spheres(arr),
+        arr.typ, arr.prm, arr.R, arr.t, arr.vstart, arr.verts, arr.nbr_start, arr.nbr,
+        piece_spheres(arr),
         np.asarray(obj.centroid_object, float), float(obj.max_radius), prog,
         float(settings.contact_tol_mm), int(settings.max_points_per_link),
         float(np.cos(np.deg2rad(palmar_angle_deg))), SDF_LIPSCHITZ, NORMAL_STEP_MM,

@@ -43,19 +43,62 @@ EPS_ABS = 1e-18
 MAX_ITERS = 128
 
 
+#: A ``POINTS`` shape with at least this many vertices and a neighbour table is searched by
+#: climbing its hull's edges (``_support_local``) instead of scanning every vertex.
+CLIMB_MIN_VERTS = 48
+#: The climb of a query's first support starts at the best of about this many vertices.
+CLIMB_SEEDS = 32
+
+
 @njit(cache=True, inline="always")
 def _support_local(
-    typ: int, prm: np.ndarray, verts: np.ndarray, v0: int, v1: int, d: np.ndarray, out: np.ndarray
-) -> None:
-    """Support point of a shape's core in its own frame along direction ``d`` -> ``out``."""
+    typ: int, prm: np.ndarray, verts: np.ndarray, nbr_start: np.ndarray, nbr: np.ndarray,
+    v0: int, v1: int, d: np.ndarray, out: np.ndarray, hint: np.ndarray, h: int,
+) -> None:  # fmt: skip
+    """Support point of a shape's core in its own frame along direction ``d`` -> ``out``.
+
+    A ``POINTS`` shape whose vertices have a neighbour table (``nbr[nbr_start[i]:
+    nbr_start[i + 1]]``: the vertices joined to vertex i by a hull edge; ``hull_neighbours``)
+    is searched by steepest ascent along the edges from ``hint[h]`` (the last support found
+    in this query; for its first, the best of ``CLIMB_SEEDS`` evenly spread hull vertices),
+    which ends at a global maximum: a vertex of a convex polytope that no
+    edge-neighbour beats maximises any linear function over the polytope (the simplex
+    method's optimality). Otherwise every vertex is scanned."""
     if typ == POINTS:
+        ib = -1
         best = -1e300
-        ib = v0
-        for i in range(v0, v1):
-            s = verts[i, 0] * d[0] + verts[i, 1] * d[1] + verts[i, 2] * d[2]
-            if s > best:
-                best = s
-                ib = i
+        if v1 - v0 >= CLIMB_MIN_VERTS and nbr_start.shape[0] > v1 and nbr_start[v1] > nbr_start[v0]:
+            ib = hint[h]
+            if ib < v0 or ib >= v1 or nbr_start[ib] == nbr_start[ib + 1]:
+                # a query's first support: start at the best hull vertex of a sample
+                ib = -1
+                for i in range(v0, v1, max(1, (v1 - v0) // CLIMB_SEEDS)):
+                    sv = verts[i, 0] * d[0] + verts[i, 1] * d[1] + verts[i, 2] * d[2]
+                    if sv > best and nbr_start[i + 1] > nbr_start[i]:
+                        best = sv
+                        ib = i
+            if ib >= 0:
+                best = verts[ib, 0] * d[0] + verts[ib, 1] * d[1] + verts[ib, 2] * d[2]
+                while True:
+                    nxt = ib
+                    for e in range(nbr_start[ib], nbr_start[ib + 1]):
+                        j = nbr[e]
+                        sj = verts[j, 0] * d[0] + verts[j, 1] * d[1] + verts[j, 2] * d[2]
+                        if sj > best:
+                            best = sj
+                            nxt = j
+                    if nxt == ib:
+                        break
+                    ib = nxt
+                hint[h] = ib
+        if ib < 0:  # no table, or no hull vertex in the sample: scan every vertex
+            best = -1e300
+            ib = v0
+            for i in range(v0, v1):
+                sv = verts[i, 0] * d[0] + verts[i, 1] * d[1] + verts[i, 2] * d[2]
+                if sv > best:
+                    best = sv
+                    ib = i
         out[0] = verts[ib, 0]
         out[1] = verts[ib, 1]
         out[2] = verts[ib, 2]
@@ -79,6 +122,21 @@ def _support_local(
         out[0] = 0.0
         out[1] = 0.0
         out[2] = 0.0
+
+
+def hull_neighbours(verts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(nbr_start (V + 1,), nbr) of a point set (V, 3): the vertices joined to vertex i by an
+    edge of the convex hull (triangulated) are ``nbr[nbr_start[i]:nbr_start[i + 1]]``; a
+    point that is not a hull vertex (inside, or on a face) has none. Raises scipy's
+    ``QhullError`` on a flat or degenerate set (the caller then scans every vertex)."""
+    from scipy.spatial import ConvexHull
+
+    hull = ConvexHull(np.asarray(verts, float))
+    t = hull.simplices  # (F, 3)
+    e = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
+    e = np.unique(np.concatenate([e, e[:, ::-1]]), axis=0)  # both directions, sorted by source
+    nbr_start = np.searchsorted(e[:, 0], np.arange(len(verts) + 1)).astype(np.int64)
+    return nbr_start, np.ascontiguousarray(e[:, 1], np.int64)
 
 
 @njit(cache=True, inline="always")
@@ -178,6 +236,10 @@ def _closest_on_simplex(
     return nbest
 
 
+#: An empty neighbour table: every ``POINTS`` shape is scanned.
+NO_NEIGHBOURS = np.zeros(1, np.int64)
+
+
 @njit(cache=True)
 def core_distance(
     ta: int,
@@ -194,7 +256,33 @@ def core_distance(
     vb0: int,
     vb1: int,
 ) -> float:
-    """Distance between the cores of shapes a and b (0 when they intersect).
+    """Distance between the cores of shapes a and b (0 when they intersect); every vertex
+    of a ``POINTS`` shape is scanned (``core_distance_nbr``)."""
+    return core_distance_nbr(ta, pa, Ra, tra, tb, pb, Rb, trb, verts, NO_NEIGHBOURS,
+                             NO_NEIGHBOURS, va0, va1, vb0, vb1)  # fmt: skip
+
+
+@njit(cache=True)
+def core_distance_nbr(
+    ta: int,
+    pa: np.ndarray,
+    Ra: np.ndarray,
+    tra: np.ndarray,
+    tb: int,
+    pb: np.ndarray,
+    Rb: np.ndarray,
+    trb: np.ndarray,
+    verts: np.ndarray,
+    nbr_start: np.ndarray,
+    nbr: np.ndarray,
+    va0: int,
+    va1: int,
+    vb0: int,
+    vb1: int,
+) -> float:
+    """Distance between the cores of shapes a and b (0 when they intersect), with the
+    vertices' hull-edge neighbours (``_support_local``; ``nbr_start`` covers every row of
+    ``verts`` or is ``NO_NEIGHBOURS``).
 
     The computation runs in b's frame (a is moved there once)."""
     # a's pose in b's frame: R = Rb^T Ra, t = Rb^T (ta - tb)
@@ -221,14 +309,15 @@ def core_distance(
     vn = np.empty(3)
     wk = np.empty((9, 3))
     idx = np.empty(4, np.int64)
+    hint = np.full(2, -1, np.int64)  # the last support vertex of a and of b (none yet)
 
     def minkowski(dir_: np.ndarray) -> None:  # w = s_a(dir) - s_b(-dir), b frame
         for i in range(3):
             dl[i] = R[0, i] * dir_[0] + R[1, i] * dir_[1] + R[2, i] * dir_[2]
-        _support_local(ta, pa, verts, va0, va1, dl, sa)
+        _support_local(ta, pa, verts, nbr_start, nbr, va0, va1, dl, sa, hint, 0)
         for i in range(3):
             d[i] = -dir_[i]
-        _support_local(tb, pb, verts, vb0, vb1, d, sb)
+        _support_local(tb, pb, verts, nbr_start, nbr, vb0, vb1, d, sb, hint, 1)
         for i in range(3):
             w[i] = R[i, 0] * sa[0] + R[i, 1] * sa[1] + R[i, 2] * sa[2] + t[i] - sb[i]
 
@@ -366,12 +455,36 @@ def shape_distance(
 ) -> float:
     """Distance between shapes a and b, mm (cores' distance minus the margins). A capsule or
     sphere against a cylinder takes the direct route (``_segment_cylinder``), the rest GJK."""
+    return shape_distance_nbr(ta, pa, Ra, tra, tb, pb, Rb, trb, verts, NO_NEIGHBOURS,
+                              NO_NEIGHBOURS, va0, va1, vb0, vb1)  # fmt: skip
+
+
+@njit(cache=True)
+def shape_distance_nbr(
+    ta: int,
+    pa: np.ndarray,
+    Ra: np.ndarray,
+    tra: np.ndarray,
+    tb: int,
+    pb: np.ndarray,
+    Rb: np.ndarray,
+    trb: np.ndarray,
+    verts: np.ndarray,
+    nbr_start: np.ndarray,
+    nbr: np.ndarray,
+    va0: int,
+    va1: int,
+    vb0: int,
+    vb1: int,
+) -> float:
+    """``shape_distance`` with the vertices' hull-edge neighbours (``core_distance_nbr``)."""
     if tb == CYLINDER and (ta == CAPSULE or ta == SPHERE):
         dc = _capsule_cylinder(pa[1] if ta == CAPSULE else 0.0, Ra, tra, pb, Rb, trb)
     elif ta == CYLINDER and (tb == CAPSULE or tb == SPHERE):
         dc = _capsule_cylinder(pb[1] if tb == CAPSULE else 0.0, Rb, trb, pa, Ra, tra)
     else:
-        dc = core_distance(ta, pa, Ra, tra, tb, pb, Rb, trb, verts, va0, va1, vb0, vb1)
+        dc = core_distance_nbr(ta, pa, Ra, tra, tb, pb, Rb, trb, verts, nbr_start, nbr,
+                               va0, va1, vb0, vb1)  # fmt: skip
     return dc - margin(ta, pa) - margin(tb, pb)
 
 
