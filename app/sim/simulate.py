@@ -275,6 +275,9 @@ class PalmGrasp:
     """Contacts of the palm and the long fingers."""
     queries: int
     """Distance queries spent."""
+    derived: dict[str, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
+    """Per-process memo of numbers derived from this stage for every design (the posed
+    non-thumb links the thumb closes against: ``_thumb_obstacles``); not stored."""
 
 
 def _placement(hyps: Hypotheses, i: int, s: float, kit: HandKit) -> np.ndarray:
@@ -415,7 +418,8 @@ def simulate_base(
         return BaseGrasp(False, T, q.copy(), ContactSet(), queries)
     if stats.stages is not None:
         stats.approach_s = (start, s)
-    obstacles = _thumb_obstacles(kit, obj, T, q, closing)
+    memo = palm.derived if T is palm.T_object_palm else None
+    obstacles = _thumb_obstacles(kit, obj, T, q, closing, memo)
     shared = obstacles if obstacles.arrays is not None else None  # FCL bodies are the kit's
     base = BaseGrasp(True, T, q.copy(), cs, queries, shared)
     if closing.mode == "sequential":
@@ -429,14 +433,24 @@ def simulate_base(
 
 
 def _thumb_obstacles(
-    kit: HandKit, obj: GraspTarget, T: np.ndarray, q: np.ndarray, closing: ClosingSettings
+    kit: HandKit,
+    obj: GraspTarget,
+    T: np.ndarray,
+    q: np.ndarray,
+    closing: ClosingSettings,
+    memo: dict[str, np.ndarray] | None = None,
 ) -> Obstacles:
     """What the thumb closes against: the object, and (self-collision) the palm and the long
-    fingers posed at ``q`` (15,), the base posture."""
+    fingers posed at ``q`` (15,), the base posture. ``memo``: where the posed links are kept
+    for other designs on the same (T, q) (``PalmGrasp.derived``; the non-thumb links are the
+    same in every design of a hand file)."""
     pieces = list(obj.collision_objects())
-    T_links = T @ kit.hand.link_poses(q)
     others = kit.non_thumb
-    T_fcl = np.stack([T_links[j] @ kit.T_link_fcl[j] for j in others])  # (13, 4, 4)
+    T_fcl = None if memo is None else memo.get("T_object_fcl_non_thumb")
+    if T_fcl is None:
+        T_fcl = T @ kit.hand.link_poses(q)[others] @ kit.T_link_fcl[others]  # (13, 4, 4)
+        if memo is not None:
+            memo["T_object_fcl_non_thumb"] = T_fcl
     obj_arr = _object_arrays(obj, closing)
     if obj_arr is None:  # the compiled engine reads the arrays only
         for n, j in enumerate(others):
@@ -479,8 +493,9 @@ def simulate_thumb(
     q[list(thumb.joints)] = close_finger(
         thumb, kit.bodies("thumb"), T, obstacles, closing, stats, base.thumb_first_stage
     )
-    T_links = T @ kit.hand.link_poses(q)
     idx = list(thumb.link_indices)
+    T_links = np.empty((len(kit.names), 4, 4))  # only the thumb's rows are read
+    T_links[idx] = T @ thumb.link_poses(q[list(thumb.joints)])
     cs, n_q = kit.contacts(obj, T_links, idx, settings)
     return Grasp(
         T,
