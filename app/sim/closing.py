@@ -75,10 +75,28 @@ class Obstacles:
     """The same obstacles as flat arrays for the compiled engine (``settings.engine ==
     'compiled'``); None: FCL closes (also what an imported mesh gets)."""
 
+    _kernel_args: tuple[np.ndarray, np.ndarray, np.ndarray] | None = field(
+        default=None, repr=False, compare=False
+    )
+
     @property
     def is_object(self) -> np.ndarray:
         """(P,) True for object pieces."""
         return np.arange(len(self.objs)) < self.n_object
+
+    def kernel_args(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(is_object (P,), mask (3, P), spheres (P, 4)) as the compiled stage reads them,
+        made once per obstacle set (a base's is closed against by every design)."""
+        if self._kernel_args is None:
+            P = len(self.objs) if self.arrays is None else len(self.arrays)
+            m = np.ones((3, P), np.bool_) if self.mask is None else self.mask
+            sph = np.full((P, 4), np.inf) if self.spheres is None else self.spheres
+            self._kernel_args = (
+                np.arange(P) < self.n_object,
+                np.ascontiguousarray(m, np.bool_),
+                np.ascontiguousarray(sph, float),
+            )
+        return self._kernel_args
 
 
 @dataclass
@@ -302,11 +320,28 @@ def _advance(
         settings.stop_tol_mm,
         settings.max_steps,
         counters,
+        obstacles.kernel_args(),
     )
     stats.queries += int(counters[0])
     stats.steps += int(counters[1])
     stats.capped += int(counters[2])
     return q, StageEvent(kind, links, joints)
+
+
+#: Joint rate vectors of the sequential stages (never written).
+_UNIT = np.eye(3)
+
+_EVENT_NAMES: dict[tuple[str, tuple[bool, ...], str], str] = {}
+
+
+def _event_name(finger: str, v: np.ndarray, kind: str) -> str:
+    """'thumb:[1]:contact': the finger, the joints a stage moved, why it stopped."""
+    key = (finger, tuple(bool(x) for x in v > 0), kind)
+    name = _EVENT_NAMES.get(key)
+    if name is None:
+        name = f"{finger}:{[i for i, on in enumerate(key[1]) if on]}:{kind}"
+        _EVENT_NAMES[key] = name
+    return name
 
 
 def close_finger(
@@ -340,14 +375,14 @@ def close_finger(
             q, ev = _advance(chain, bodies, T_object_palm, q, v, obstacles, settings, stats)
             if memo:
                 first_stage[chain.finger] = (q.copy(), ev)  # type: ignore[index]
-        stats.events.append(f"{chain.finger}:{np.flatnonzero(v > 0).tolist()}:{ev.kind}")
+        stats.events.append(_event_name(chain.finger, v, ev.kind))
         if stats.stages is not None:
             stats.stages.append((chain.finger, q0.copy(), q.copy(), ev.kind))
         return ev
 
     def sequential(k: int) -> None:
         while k < 3:
-            ev = run(np.eye(3)[k])
+            ev = run(_UNIT[k])
             k = max(ev.links) + 1 if ev.kind in ("contact", "self") else k + 1
 
     def together(active: list[int], rates: np.ndarray) -> int:
@@ -375,7 +410,7 @@ def close_finger(
         rates = np.array([settings.thumb_rates[0], settings.thumb_rates[1], 0.0])
         sequential(together([0, 1], rates))
     elif first_stage_only:
-        run(np.eye(3)[0])
+        run(_UNIT[0])
     else:
         sequential(0)
     return q

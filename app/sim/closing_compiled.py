@@ -636,12 +636,18 @@ def advance_stage_compiled(
     tol: float,
     max_steps: int,
     counters: np.ndarray,
+    kernel_args: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, str, tuple[int, ...], tuple[int, ...]]:
-    """``advance_stage`` on the compiled engine: (q, event kind, links, joints)."""
-    P = len(arrays)
-    is_obj = np.arange(P) < n_object
-    m = np.ones((3, P), np.bool_) if mask is None else np.ascontiguousarray(mask, np.bool_)
-    sph = np.full((P, 4), np.inf) if spheres is None else np.ascontiguousarray(spheres, float)
+    """``advance_stage`` on the compiled engine: (q, event kind, links, joints).
+    ``kernel_args``: (is_object, mask, spheres) already in the kernel's layout
+    (``Obstacles.kernel_args``), else made from the arguments before."""
+    if kernel_args is not None:
+        is_obj, m, sph = kernel_args
+    else:
+        P = len(arrays)
+        is_obj = np.arange(P) < n_object
+        m = np.ones((3, P), np.bool_) if mask is None else np.ascontiguousarray(mask, np.bool_)
+        sph = np.full((P, 4), np.inf) if spheres is None else np.ascontiguousarray(spheres, float)
     qn, code, links, joints = advance_stage_kernel(
         *chain_arrays(chain),
         np.ascontiguousarray(T_object_palm, float),

@@ -45,7 +45,7 @@ MAX_ITERS = 128
 
 #: A ``POINTS`` shape with at least this many vertices and a neighbour table is searched by
 #: climbing its hull's edges (``_support_local``) instead of scanning every vertex.
-CLIMB_MIN_VERTS = 48
+CLIMB_MIN_VERTS = 256
 #: The climb of a query's first support starts at the best of about this many vertices.
 CLIMB_SEEDS = 32
 

@@ -115,6 +115,7 @@ class HandKit:
         #: the thumbless links (``non_thumb``) and the thumb's (``thumb_links``) in turn
         self.T_palm_approach = T_open @ self.T_link_fcl
         self._approach_arrays: dict[tuple[int, ...], ObstacleArrays] = {}
+        self._approach_poses: dict[tuple[int, ...], np.ndarray] = {}
         #: the links a thumb closes against (self-collision): palm and long fingers
         self.non_thumb = [j for j, n in enumerate(self.names) if not n.startswith("thumb")]
         #: the thumb's links
@@ -131,6 +132,14 @@ class HandKit:
             shapes = [self.shapes[j] for j in idx]
             got = link_arrays(shapes, np.tile(np.eye(4), (len(shapes), 1, 1)))
             self._approach_arrays[idx] = got
+        return got
+
+    def approach_poses(self, idx: tuple[int, ...]) -> np.ndarray:
+        """(len(idx), 4, 4) the open-hand links ``idx``' FCL frames in the palm frame."""
+        got = self._approach_poses.get(idx)
+        if got is None:
+            got = np.ascontiguousarray(self.T_palm_approach[list(idx)])
+            self._approach_poses[idx] = got
         return got
 
     def thumb_obstacle_arrays(self, obj_arr: ObstacleArrays, T_fcl: np.ndarray) -> ObstacleArrays:
@@ -275,9 +284,9 @@ class PalmGrasp:
     """Contacts of the palm and the long fingers."""
     queries: int
     """Distance queries spent."""
-    derived: dict[str, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
-    """Per-process memo of numbers derived from this stage for every design (the posed
-    non-thumb links the thumb closes against: ``_thumb_obstacles``); not stored."""
+    derived: dict[str, Obstacles] = field(default_factory=dict, repr=False, compare=False)
+    """Per-process memo of what every design derives alike from this stage (what the thumb
+    closes against on the compiled engine: ``_thumb_obstacles``); not stored."""
 
 
 def _placement(hyps: Hypotheses, i: int, s: float, kit: HandKit) -> np.ndarray:
@@ -309,18 +318,19 @@ def _approach_links(
     """First contact (ray parameter, mm; NaN for none) of the open hand's links ``idx``;
     NaN too when there is none above ``floor_mm`` (``approach``)."""
     obj_arr = _object_arrays(obj, closing)
+    key = tuple(idx)
     s = approach(
-        [kit.moving[j] for j in idx],
-        kit.T_palm_approach[idx],
+        [kit.moving[j] for j in idx] if obj_arr is None else [],  # the arrays are read
+        kit.approach_poses(key),
         hyps.R_object_palm[i],
         hyps.ray_object[i],
         hyps.target_object,
         kit.hand.approach_point_palm,
-        list(obj.collision_objects()),
+        list(obj.collision_objects()) if obj_arr is None else [],
         start,
         closing,
         stats,
-        None if obj_arr is None else (kit.approach_arrays(tuple(idx)), obj_arr),
+        None if obj_arr is None else (kit.approach_arrays(key), obj_arr),
         floor_mm,
     )
     return math.nan if s is None else s
@@ -418,8 +428,15 @@ def simulate_base(
         return BaseGrasp(False, T, q.copy(), ContactSet(), queries)
     if stats.stages is not None:
         stats.approach_s = (start, s)
-    memo = palm.derived if T is palm.T_object_palm else None
-    obstacles = _thumb_obstacles(kit, obj, T, q, closing, memo)
+    # on the palm stage's placement every design closes its thumb against the same posed
+    # object and non-thumb links (the compiled engine reads arrays only; FCL bodies are the
+    # kit's): made once per palm stage and process
+    memo = palm.derived if T is palm.T_object_palm else {}
+    obstacles = memo.get("thumb_obstacles")
+    if obstacles is None:
+        obstacles = _thumb_obstacles(kit, obj, T, q, closing)
+        if obstacles.arrays is not None:
+            memo["thumb_obstacles"] = obstacles
     shared = obstacles if obstacles.arrays is not None else None  # FCL bodies are the kit's
     base = BaseGrasp(True, T, q.copy(), cs, queries, shared)
     if closing.mode == "sequential":
@@ -433,24 +450,14 @@ def simulate_base(
 
 
 def _thumb_obstacles(
-    kit: HandKit,
-    obj: GraspTarget,
-    T: np.ndarray,
-    q: np.ndarray,
-    closing: ClosingSettings,
-    memo: dict[str, np.ndarray] | None = None,
+    kit: HandKit, obj: GraspTarget, T: np.ndarray, q: np.ndarray, closing: ClosingSettings
 ) -> Obstacles:
     """What the thumb closes against: the object, and (self-collision) the palm and the long
-    fingers posed at ``q`` (15,), the base posture. ``memo``: where the posed links are kept
-    for other designs on the same (T, q) (``PalmGrasp.derived``; the non-thumb links are the
-    same in every design of a hand file)."""
+    fingers posed at ``q`` (15,), the base posture (the same in every design of a hand
+    file)."""
     pieces = list(obj.collision_objects())
     others = kit.non_thumb
-    T_fcl = None if memo is None else memo.get("T_object_fcl_non_thumb")
-    if T_fcl is None:
-        T_fcl = T @ kit.hand.link_poses(q)[others] @ kit.T_link_fcl[others]  # (13, 4, 4)
-        if memo is not None:
-            memo["T_object_fcl_non_thumb"] = T_fcl
+    T_fcl = T @ kit.hand.link_poses(q)[others] @ kit.T_link_fcl[others]  # (13, 4, 4)
     obj_arr = _object_arrays(obj, closing)
     if obj_arr is None:  # the compiled engine reads the arrays only
         for n, j in enumerate(others):
