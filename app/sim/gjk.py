@@ -437,6 +437,59 @@ def _capsule_cylinder(
     return _segment_cylinder(pb[0], pb[1], p0, p1)
 
 
+@njit(cache=True, inline="always")
+def _point_segment2(
+    px: float, py: float, pz: float, q: np.ndarray, d: np.ndarray, dd: float
+) -> float:
+    """Squared distance from a point to the segment q + u d, u in [0, 1] (dd = d·d)."""
+    u = 0.0
+    if dd > 0.0:
+        u = min(max(((px - q[0]) * d[0] + (py - q[1]) * d[1] + (pz - q[2]) * d[2]) / dd, 0.0), 1.0)
+    x, y, z = px - q[0] - u * d[0], py - q[1] - u * d[1], pz - q[2] - u * d[2]
+    return x * x + y * y + z * z
+
+
+@njit(cache=True)
+def _segment_segment(
+    ha: float, Ra: np.ndarray, tra: np.ndarray, hb: float, Rb: np.ndarray, trb: np.ndarray
+) -> float:
+    """Distance between the segments ±ha and ±hb along the z axes of two frames (capsule
+    cores; a point for a half length of 0), closed form. The nearest pair is either interior
+    to both (where the two lines' nearest points fall inside both segments) or has an end of
+    one: the smallest of those five candidates, each an actual pair of points, so the result
+    never falls below the true distance and (near-)parallel segments, whose interior solution
+    is ill-conditioned, are exact through their ends."""
+    p = np.empty(3)
+    q = np.empty(3)
+    d1 = np.empty(3)
+    d2 = np.empty(3)
+    for i in range(3):
+        d1[i] = 2.0 * ha * Ra[i, 2]
+        d2[i] = 2.0 * hb * Rb[i, 2]
+        p[i] = tra[i] - ha * Ra[i, 2]
+        q[i] = trb[i] - hb * Rb[i, 2]
+    a = d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]
+    e = d2[0] * d2[0] + d2[1] * d2[1] + d2[2] * d2[2]
+    best = _point_segment2(p[0], p[1], p[2], q, d2, e)
+    best = min(best, _point_segment2(p[0] + d1[0], p[1] + d1[1], p[2] + d1[2], q, d2, e))
+    best = min(best, _point_segment2(q[0], q[1], q[2], p, d1, a))
+    best = min(best, _point_segment2(q[0] + d2[0], q[1] + d2[1], q[2] + d2[2], p, d1, a))
+    b = d1[0] * d2[0] + d1[1] * d2[1] + d1[2] * d2[2]
+    den = a * e - b * b
+    if den > 0.0:
+        r0, r1, r2 = p[0] - q[0], p[1] - q[1], p[2] - q[2]
+        c = d1[0] * r0 + d1[1] * r1 + d1[2] * r2
+        f = d2[0] * r0 + d2[1] * r1 + d2[2] * r2
+        s = (b * f - c * e) / den
+        t = (a * f - b * c) / den
+        if 0.0 < s < 1.0 and 0.0 < t < 1.0:
+            x = r0 + s * d1[0] - t * d2[0]
+            y = r1 + s * d1[1] - t * d2[1]
+            z = r2 + s * d1[2] - t * d2[2]
+            best = min(best, x * x + y * y + z * z)
+    return math.sqrt(best)
+
+
 @njit(cache=True)
 def shape_distance(
     ta: int,
@@ -477,8 +530,12 @@ def shape_distance_nbr(
     vb0: int,
     vb1: int,
 ) -> float:
-    """``shape_distance`` with the vertices' hull-edge neighbours (``core_distance_nbr``)."""
-    if tb == CYLINDER and (ta == CAPSULE or ta == SPHERE):
+    """``shape_distance`` with the vertices' hull-edge neighbours (``core_distance_nbr``).
+    Capsules and spheres against each other take the closed form (``_segment_segment``)."""
+    if (ta == CAPSULE or ta == SPHERE) and (tb == CAPSULE or tb == SPHERE):
+        dc = _segment_segment(pa[1] if ta == CAPSULE else 0.0, Ra, tra,
+                              pb[1] if tb == CAPSULE else 0.0, Rb, trb)  # fmt: skip
+    elif tb == CYLINDER and (ta == CAPSULE or ta == SPHERE):
         dc = _capsule_cylinder(pa[1] if ta == CAPSULE else 0.0, Ra, tra, pb, Rb, trb)
     elif ta == CYLINDER and (tb == CAPSULE or tb == SPHERE):
         dc = _capsule_cylinder(pb[1] if tb == CAPSULE else 0.0, Rb, trb, pa, Ra, tra)

@@ -13,11 +13,19 @@ import numpy as np
 
 from app.errors import HandbenchError
 
+#: The repository's folder (resolved once: resolving walks the file system, and the hand
+#: file's path is asked for on every hypothesis).
+_REPO_ROOT = Path(__file__).resolve().parents[3]
+
+
+#: Environment variable naming the folder that holds ``hand_models/`` and ``objects/``.
+DATA_ENV = "HANDBENCH_DATA_DIR"
+
 
 def data_root() -> Path:
     """The folder holding ``hand_models/`` and ``objects/`` (env ``HANDBENCH_DATA_DIR``)."""
-    env = os.environ.get("HANDBENCH_DATA_DIR")
-    return Path(env) if env else Path(__file__).resolve().parents[3]
+    env = os.environ.get(DATA_ENV)
+    return Path(env) if env else _REPO_ROOT
 
 
 @dataclass(frozen=True)
@@ -170,7 +178,15 @@ def hand_path(path: str | Path | None = None) -> Path:
 
 def load_hand_dims(path: str | Path | None = None) -> HandDims:
     """Read a hand model file (default: see ``hand_path``)."""
+    if path is None:  # asked for on every hypothesis: the default's path per environment
+        return _load_hand_dims(_default_path(os.environ.get(HAND_ENV), os.environ.get(DATA_ENV)))
     return _load_hand_dims(hand_path(path))
+
+
+@lru_cache(maxsize=8)
+def _default_path(hand_env: str | None, data_env: str | None) -> Path:
+    """``hand_path()`` for these values of ``$HANDBENCH_HAND`` and ``$HANDBENCH_DATA_DIR``."""
+    return hand_path()
 
 
 @lru_cache(maxsize=8)
