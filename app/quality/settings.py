@@ -15,7 +15,10 @@ from app.sim.contacts import ContactSettings
 
 #: Bumped whenever a code change alters simulated outcomes: part of the settings key, so a
 #: store never serves results of an older engine as current.
-ENGINE_VERSION = 7  # 7: the approach stops at the later of the thumbless hand's and the open
+ENGINE_VERSION = 8  # 8: capsule-capsule and capsule-cylinder distances in closed form, GJK
+# climbing large hulls' edges (distances equal to ~1e-9 mm; a stop can move within the
+# stage's tolerance band)
+# 7: the approach stops at the later of the thumbless hand's and the open
 # thumb's first contacts, each found by its own steps (the thumbless part is shared by designs)
 # 6: a contact patch is every link sample within tol (no 30 mm disc about
 # the nearest point), thinned in the link frame
