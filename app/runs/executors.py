@@ -4,6 +4,7 @@ local process pool. (The Ray executor is ``app.runs.ray_executor``.)
 
 from __future__ import annotations
 
+import math
 import mmap
 import os
 import shutil
@@ -19,7 +20,9 @@ from pathlib import Path
 from typing import Any
 
 from app.errors import WorkerCrashError
+from app.model.design import ThumbDesign
 from app.quality.outcome import GraspOutcome
+from app.quality.settings import SimSettings
 from app.runs.tasks import Task, run_task
 
 #: Bytes of a worker's marker file: "<object> <index>" padded with blanks.
@@ -75,8 +78,6 @@ def init_worker(object_names: Sequence[str], ignore_sigint: bool = False, nice: 
             os.nice(nice)
         except OSError:  # not allowed here: run at the parent's priority
             pass
-    from app.model.design import ThumbDesign
-    from app.quality.settings import SimSettings
     from app.runs.palm_cache import palm_table
 
     s = SimSettings()
@@ -87,8 +88,29 @@ def init_worker(object_names: Sequence[str], ignore_sigint: bool = False, nice: 
                 (i for i in range(min(len(table), 64)) if table.get(i).contacts.p_object.size), 0
             )
             run_task(Task(name, (touching,), (ThumbDesign(),), s))
+            prepare_thumb_obstacles(name, s)
         except Exception:  # a warm-up only: the object's own tasks report what is wrong
             continue
+
+
+def prepare_thumb_obstacles(object_name: str, settings: SimSettings) -> int:
+    """Make what the thumb closes against on every palm stage of the object's table now
+    (``palm_thumb_obstacles``; each process makes its own, about 0.1 ms a hypothesis and a
+    few kB each), so that a new design's tasks do not; how many were made. Objects whose
+    table is not complete (palm stages computed as they go) are left alone."""
+    from app.model.objects import load_object
+    from app.runs.palm_cache import palm_table
+    from app.sim.simulate import base_kit, palm_thumb_obstacles
+
+    table = palm_table(object_name, settings)
+    if not table.complete:
+        return 0
+    obj, kit = load_object(object_name), base_kit(ThumbDesign())
+    for i in range(len(table)):
+        palm = table.get(i)
+        if not math.isnan(palm.s_mm):
+            palm_thumb_obstacles(kit, obj, palm, settings.closing)
+    return len(table)
 
 
 def _started() -> int:

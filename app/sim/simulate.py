@@ -428,15 +428,10 @@ def simulate_base(
         return BaseGrasp(False, T, q.copy(), ContactSet(), queries)
     if stats.stages is not None:
         stats.approach_s = (start, s)
-    # on the palm stage's placement every design closes its thumb against the same posed
-    # object and non-thumb links (the compiled engine reads arrays only; FCL bodies are the
-    # kit's): made once per palm stage and process
-    memo = palm.derived if T is palm.T_object_palm else {}
-    obstacles = memo.get("thumb_obstacles")
-    if obstacles is None:
+    if T is palm.T_object_palm:
+        obstacles = palm_thumb_obstacles(kit, obj, palm, closing)
+    else:
         obstacles = _thumb_obstacles(kit, obj, T, q, closing)
-        if obstacles.arrays is not None:
-            memo["thumb_obstacles"] = obstacles
     shared = obstacles if obstacles.arrays is not None else None  # FCL bodies are the kit's
     base = BaseGrasp(True, T, q.copy(), cs, queries, shared)
     if closing.mode == "sequential":
@@ -447,6 +442,21 @@ def simulate_base(
                      closing, st, base.thumb_first_stage, first_stage_only=True)  # fmt: skip
         base = dataclasses.replace(base, queries=base.queries + st.queries)
     return base
+
+
+def palm_thumb_obstacles(
+    kit: HandKit, obj: GraspTarget, palm: PalmGrasp, closing: ClosingSettings
+) -> Obstacles:
+    """What the thumb closes against on the palm stage's placement: the same posed object and
+    non-thumb links for every design, so made once per palm stage and process and kept in
+    ``palm.derived`` (compiled engine: arrays only; FCL bodies are the kit's, made anew).
+    Any kit of the hand file gives the same obstacles."""
+    got = palm.derived.get("thumb_obstacles")
+    if got is None:
+        got = _thumb_obstacles(kit, obj, palm.T_object_palm, palm.q, closing)
+        if got.arrays is not None:
+            palm.derived["thumb_obstacles"] = got
+    return got
 
 
 def _thumb_obstacles(
