@@ -47,11 +47,11 @@ class ContactSet:
     @property
     def links(self) -> set[str]:
         """Names of the links with at least one contact point."""
-        return {str(s) for s in self.link}
+        return set(map(str, set(self.link.tolist())))
 
     def palmar_links(self) -> set[str]:
         """Names of the links with at least one palmar contact point."""
-        return {str(s) for s, p in zip(self.link, self.palmar, strict=True) if p}
+        return set(map(str, set(self.link[self.palmar.astype(bool)].tolist())))
 
     def transformed(self, T_new_object: np.ndarray) -> ContactSet:
         """The same contacts expressed in another frame (rigid motion ``T_new_object``)."""

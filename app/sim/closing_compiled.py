@@ -229,6 +229,12 @@ def _link_poses(placements: np.ndarray, q: np.ndarray, T_op: np.ndarray) -> np.n
     return out
 
 
+def thumb_link_poses(placements: np.ndarray, q: np.ndarray, T_op: np.ndarray) -> np.ndarray:
+    """(3, 4, 4) T_object_link of a finger at q (3,) (``FingerChain.link_poses``, then
+    T_object_palm @), compiled."""
+    return _link_poses(placements, q, T_op)
+
+
 @njit(cache=True)
 def _axis_rates(
     T_links: np.ndarray, ends_link: np.ndarray, radii: np.ndarray, v: np.ndarray

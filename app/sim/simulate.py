@@ -483,6 +483,19 @@ def _thumb_obstacles(
     return Obstacles(objs, len(pieces), mask, spheres, arrays)
 
 
+def _thumb_poses(
+    thumb: FingerChain, T: np.ndarray, q_thumb: np.ndarray, closing: ClosingSettings
+) -> np.ndarray:
+    """(3, 4, 4) T_object_link of the thumb's links at its joint angles (3,): the compiled
+    engine's own product (one call), else the chain's."""
+    if closing.engine == "compiled":
+        from app.sim.closing_compiled import chain_arrays, thumb_link_poses
+
+        return thumb_link_poses(chain_arrays(thumb)[0], np.ascontiguousarray(q_thumb, float),
+                                np.ascontiguousarray(T, float))  # fmt: skip
+    return T @ thumb.link_poses(q_thumb)
+
+
 def _n_main(kit: HandKit, T_distal: np.ndarray) -> np.ndarray:
     """The thumb distal link's long axis from its pose (link +y unless the hand file's
     reading builds the thumb oblique to its hinges: ``Hand.thumb_bones``)."""
@@ -512,7 +525,7 @@ def simulate_thumb(
     )
     idx = list(thumb.link_indices)
     T_links = np.empty((len(kit.names), 4, 4))  # only the thumb's rows are read
-    T_links[idx] = T @ thumb.link_poses(q[list(thumb.joints)])
+    T_links[idx] = _thumb_poses(thumb, T, q[list(thumb.joints)], closing)
     cs, n_q = kit.contacts(obj, T_links, idx, settings)
     return Grasp(
         T,
