@@ -270,6 +270,49 @@ def abs_bounds(pk: MeshPack, px: float, py: float, pz: float) -> tuple[float, fl
 
 
 @njit(cache=True)
+def signed_bounds(pk: MeshPack, px: float, py: float, pz: float) -> tuple[float, float]:
+    """Rigorous (lower, upper) bounds of the signed distance of a point, from the 8 grid nodes
+    around it alone (``abs_bounds`` for the magnitude). The sign is known when a node's ball
+    of radius |value| (which no surface crosses) holds the point: that node's sign; else the
+    bounds straddle 0. Outside the grid the point is outside the mesh's box: positive."""
+    origin, h, v, band = pk[0], pk[1], pk[2], pk[3]
+    nx, ny, nz = v.shape
+    fx = (px - origin[0]) / h
+    fy = (py - origin[1]) / h
+    fz = (pz - origin[2]) / h
+    if fx < 0 or fy < 0 or fz < 0 or fx > nx - 1 or fy > ny - 1 or fz > nz - 1:
+        return abs_bounds(pk, px, py, pz)
+    i = min(int(fx), nx - 2)
+    j = min(int(fy), ny - 2)
+    m = min(int(fz), nz - 2)
+    tx, ty, tz = fx - i, fy - j, fz - m
+    lower = 0.0
+    sign = 0.0
+    upper = np.inf
+    for di in range(2):
+        for dj in range(2):
+            for dm in range(2):
+                ex = (tx - di) * h
+                ey = (ty - dj) * h
+                ez = (tz - dm) * h
+                dist = math.sqrt(ex * ex + ey * ey + ez * ez)
+                val = v[i + di, j + dj, m + dm]
+                a = abs(val)
+                lo_n = a - dist - 1e-4  # float32 nodes
+                if lo_n > lower:
+                    lower = lo_n
+                    sign = 1.0 if val > 0 else -1.0
+                if a > band:
+                    a += h * 0.8660254037844387
+                upper = min(upper, a + dist + 1e-4)
+    if sign > 0:
+        return lower, upper
+    if sign < 0:
+        return -upper, -lower
+    return -upper, upper
+
+
+@njit(cache=True)
 def point_sdf(pk: MeshPack, px: float, py: float, pz: float) -> float:
     """Signed distance of one point (``DistanceField.__call__``), for compiled callers."""
     return point_sdf_kind(pk, px, py, pz)[0]
