@@ -220,7 +220,7 @@ def run_meshes(cases_mod, tmp: Path, verbose: bool, huge: bool) -> tuple[Counter
                 extra += [f] + ([v] if v is not None else [])
         key = f"case{i:03d}"
         argv = ["objects", "import", str(c.path), "--like", c.like, "--key", key]
-        argv += ["--save-to", str(user), *extra]
+        argv += ["--save-to", str(user), "--no-palm-stages", *extra]
         r = run_child(argv, 120.0 if c.family == "huge" else TIMEOUT_S, env)
         k = classify(r)
         if _raw_warning(str(r["err"])):

@@ -429,3 +429,63 @@ def test_segment_triangle_distance_is_exact() -> None:
         ref = np.sqrt(((seg[:, None, :] - tri[None, :, :]) ** 2).sum(-1)).min()
         assert d <= ref + 1e-9  # never above a sampled pair
         assert ref - d < 0.5  # and within the sampling's resolution
+
+
+def test_mesh_distance_equals_brute_force(tmp_path, monkeypatch) -> None:
+    """Capsules and boxes posed at random near an imported mesh: ``mesh_distance`` (field
+    bounds, bucket and sphere culling, closed form) equals the minimum over every triangle
+    of GJK's distance to it (the triangle a 3-vertex convex shape) to 1e-7 mm, and above its
+    threshold it returns a lower bound."""
+    from scipy.spatial.transform import Rotation
+
+    from app.sim import gjk
+    from app.sim.mesh_distance import mesh_distance
+
+    obj = _mesh_can(tmp_path, monkeypatch)
+    try:
+        pk = obj.mesh_pack()
+        V, F = np.asarray(obj.mesh.vertices), np.asarray(obj.mesh.faces)
+        surf, fi = obj.mesh.sample(60, return_index=True)
+        normals = obj.mesh.face_normals[fi]
+        rng = np.random.default_rng(12)
+        eye, zero = np.eye(3), np.zeros(3)
+        n_exact = 0
+        for k in range(60):
+            R = Rotation.from_quat(rng.normal(size=4)).as_matrix()
+            if k % 3:
+                typ, prm = gjk.CAPSULE, np.array([rng.uniform(4, 9), rng.uniform(5, 25), 0.0])
+                reach = prm[0] + prm[1] * abs(normals[k] @ R[:, 2])  # support along n
+            else:
+                typ, prm = gjk.BOX, rng.uniform(3.0, 15.0, 3)
+                reach = float(np.abs(normals[k] @ R) @ prm)  # the box's support along n
+            t = surf[k] + normals[k] * (reach + rng.uniform(-1.0, 6.0))
+            ref = min(
+                gjk.shape_distance(
+                    typ,
+                    prm,
+                    R,
+                    t,
+                    gjk.POINTS,
+                    zero,
+                    eye,
+                    zero,
+                    np.ascontiguousarray(V[f]),
+                    0,
+                    0,
+                    0,
+                    3,
+                )  # fmt: skip
+                for f in F
+            )
+            d = mesh_distance(typ, prm, R, t, pk, 1e9)
+            if ref > 1e-6:  # apart (GJK reports 0 for overlapping shapes)
+                n_exact += 1
+                assert abs(d - ref) < 1e-7, (k, d, ref)
+            else:
+                assert d <= 1e-6, (k, d, ref)
+            assert mesh_distance(typ, prm, R, t, pk, 1.0) <= d + 1e-9
+        assert n_exact >= 40
+    finally:
+        from app.model.objects.model import unregister_object
+
+        unregister_object("mesh_can_test")

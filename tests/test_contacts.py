@@ -178,3 +178,66 @@ def test_compiled_contacts_equal_numpy(key: str) -> None:
         assert np.array_equal(a.palmar, c.palmar)
         n_touch += len(a) > 0
     assert n_touch >= 15
+
+
+def test_compiled_contacts_on_an_imported_mesh_equal_numpy(tmp_path, monkeypatch) -> None:
+    """On an imported mesh the compiled contact path (the field's node bounds screen the
+    samples, ``mesh_select``; exact values where they straddle tol) gives the numpy path's
+    contact set (every screened sample's exact distance) for hands posed touching or
+    grazing the scan, grazing links (no sample within tol) included."""
+    from app.model.objects import import_object
+    from app.model.objects.model import unregister_object
+    from app.sim.closing_compiled import link_mesh_distance
+    from app.sim.contacts import ContactSettings, contacts_of_links
+    from app.sim.contacts_compiled import contacts_compiled
+    from app.sim.simulate import cached_kit
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    path = tmp_path / "pear_scan.ply"
+    load_object("plastic_pear").mesh.export(str(path))
+    obj = import_object(path, like="plastic_pear", units="mm", key="pear_scan_test")
+    try:
+        pk = obj.mesh_pack()
+        kit = cached_kit(0.0, 45.0, "ulnar")
+        settings = ContactSettings()
+        tol = settings.contact_tol_mm
+        rng = np.random.default_rng(8)
+        surface = obj.mesh.vertices
+        n_touch = n_links = n_grazing = 0
+        for k in range(40):
+            q = kit.q_open + rng.uniform(0.0, 1.2, kit.q_open.shape)
+            T_palm = np.eye(4)
+            T_palm[:3, :3], _ = np.linalg.qr(rng.normal(size=(3, 3)))
+            T_links = kit.hand.link_poses(q)
+            j = int(rng.integers(len(T_links)))
+            p_link, _ = _samples(kit.shapes[j], 1.0)
+            anchor = surface[rng.integers(len(surface))]
+            p_palm = T_links[j][:3, :3] @ p_link[0] + T_links[j][:3, 3]
+            T_palm[:3, 3] = anchor - T_palm[:3, :3] @ p_palm + rng.normal(scale=0.7, size=3)
+            T = T_palm @ T_links
+            if k % 2:  # link j moved along x until it is 0.01 mm inside tol: often grazing
+                d = link_mesh_distance(kit.shapes[j], T[j] @ kit.T_link_fcl[j], pk, 1e9)
+                for _ in range(30):
+                    if abs(d - (tol - 0.01)) < 1e-3:
+                        break
+                    T[:, 0, 3] += d - (tol - 0.01)
+                    d = link_mesh_distance(kit.shapes[j], T[j] @ kit.T_link_fcl[j], pk, 1e9)
+            a = contacts_of_links(
+                obj, kit.names, kit.shapes, kit.moving, T, kit.T_link_fcl, settings, 75.0,
+                link_distance=lambda sh, Tf: link_mesh_distance(sh, Tf, pk, tol),
+            )  # fmt: skip
+            c = contacts_compiled(obj, kit.names, kit.shapes, T, settings, 75.0)
+            assert c is not None
+            assert np.array_equal(a.link, c.link)
+            np.testing.assert_allclose(c.p_object, a.p_object, rtol=0, atol=1e-9)
+            np.testing.assert_allclose(c.n_object, a.n_object, rtol=0, atol=1e-9)
+            assert np.array_equal(a.palmar, c.palmar)
+            n_touch += len(a) > 0
+            for name in set(a.link.tolist()):
+                n_links += 1
+                p = a.p_object[a.link == name]
+                n_grazing += len(p) == 1 and float(obj.sdf(p)[0]) > tol
+        assert n_touch >= 15 and n_links >= 25
+        assert n_grazing >= 1  # the exact fallback ran too
+    finally:
+        unregister_object("pear_scan_test")

@@ -114,3 +114,25 @@ def test_mesh_objects_use_the_field(tmp_path: object, monkeypatch: pytest.Monkey
     p = _near_points(m, 300, 1.0, 5)
     np.testing.assert_allclose(g.sdf(p), mesh_sdf(m)(p), atol=1e-9)
     assert g.sdf.built_s is not None
+
+
+def test_signed_bounds_bracket_the_exact_distance(
+    case: tuple[str, trimesh.Trimesh, object],
+) -> None:
+    """The node bounds the compiled contact screening reads (``signed_bounds``) hold the exact
+    signed distance (trimesh's) near the surface, deep inside and far away, and they are
+    tight: a couple of spacings wide, and signed wherever the point is over 2 h deep or
+    away."""
+    from app.model.objects.distance_field import signed_bounds
+
+    name, m, f = case
+    pk = f.pack()  # type: ignore[attr-defined]
+    h = f.spacing_mm  # type: ignore[attr-defined]
+    p = np.vstack([_near_points(m, 400, s, 3) for s in (0.5, 2.0, 6.0, 20.0)])
+    exact = mesh_sdf(m)(p)
+    lo, hi = np.array([signed_bounds(pk, *x) for x in p]).T
+    assert np.all(lo <= exact) and np.all(exact <= hi), name
+    near = np.abs(exact) < f.band_mm  # type: ignore[attr-defined]
+    assert (hi - lo)[near].max() <= 2 * h * math.sqrt(3) + 1e-3
+    signed = np.abs(exact) > 2 * h
+    assert np.all(np.sign(lo[signed]) == np.sign(hi[signed]))

@@ -152,3 +152,65 @@ def test_worker_start_up_loads_the_objects_and_never_fails() -> None:
     table = palm_cache._TABLES[("washer", S.key())]
     assert any(r is not None for r in table._rows)
     palm_cache.clear_tables()
+
+
+def test_import_caches_the_palm_table_and_runs_use_it(tmp_path, monkeypatch, capsys) -> None:  # noqa: ANN001
+    """``objects import`` computes the imported object's palm table and caches it under the
+    built-ins' key (mesh content included); a later process (registry and tables cleared)
+    reads it from disk bit for bit equal to freshly computed stages, and its tasks take the
+    stages from it (computing one would fail here) with the outcomes of computed ones."""
+    import trimesh
+
+    from app.cli.parser import main
+    from app.model.objects.model import _load_file_cached, unregister_object
+    from app.runs.keys import object_key
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    monkeypatch.setenv("HANDBENCH_USER_OBJECTS", str(tmp_path / "objects"))
+    path = tmp_path / "can_scan.stl"
+    trimesh.creation.cylinder(radius=50.0, height=140.0, sections=48).export(str(path))
+    key = "can_scan_palm_test"
+    palm_cache.clear_tables()
+    try:
+        assert main(["objects", "import", str(path), "--like", "coffee_can", "--key", key]) == 0
+        assert f"palm stages of {key}: 420 hypotheses built" in capsys.readouterr().out
+        unregister_object(key)  # as a new process: the saved file, the cached table
+        palm_cache.clear_tables()
+        table = palm_cache.palm_table(key, S)
+        assert table.from_disk and table.complete
+        assert table.path().parent == tmp_path / "cache" / "handbench" / "palms"
+        obj, hyps = load_object(key), cached_hypotheses(key)
+        kit = palm_cache._palm_kit()
+        picks = range(0, len(hyps), 35)
+        for i in picks:
+            assert same_palm(table.get(i), simulate_palm(kit, obj, hyps, i, S)), i
+        task = Task(key, tuple(picks), (ThumbDesign(0.0, 45.0),), S)
+        monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "empty"))
+        palm_cache.clear_tables()
+        computed = run_task(task)  # no cached table: the stages are computed
+        assert not palm_cache.palm_table(key, S).from_disk
+        monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+        palm_cache.clear_tables()
+
+        def no_palm(*a, **k):  # noqa: ANN002, ANN003, ANN202
+            raise AssertionError("a palm stage was computed")
+
+        monkeypatch.setattr(palm_cache, "simulate_palm", no_palm)
+        monkeypatch.setattr("app.runs.tasks.simulate_palm", no_palm)
+        served = run_task(task)  # the cached table serves every stage
+        assert len(served) == len(picks) and any(o.is_fc for _, _, o in served)
+        for (_, _, a), (_, _, b) in zip(served, computed, strict=True):
+            assert a.same_as(b)
+        # the mesh is in the key: another mesh under the same name has another table
+        other = trimesh.creation.cylinder(radius=50.0, height=141.0, sections=48)
+        other.export(str(path))
+        assert main(["objects", "import", str(path), "--like", "coffee_can", "--key", key,
+                     "--no-palm-stages"]) == 0  # fmt: skip
+        unregister_object(key)
+        _load_file_cached.cache_clear()  # (a new process would read the new file)
+        object_key.cache_clear()
+        palm_cache.clear_tables()
+        assert not palm_cache.palm_table(key, S).from_disk
+    finally:
+        unregister_object(key)
+        palm_cache.clear_tables()

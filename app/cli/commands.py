@@ -279,6 +279,17 @@ def cmd_objects(args: argparse.Namespace) -> int:
             print(f"distance field built in {built_s:.1f} s, cached in {where}")
         elif where is not None:
             print(f"distance field found in the cache ({where})")
+        # and its palm stages (every design's shared part, docs/cost-model.md) for the
+        # default settings, so that a design on the scan costs what it does on a built-in
+        if args.no_palm_stages:
+            return 0
+        from app.model.objects.model import register_object
+        from app.runs.palm_cache import build_tables, cache_dir
+
+        register_object(saved)  # the saved file's object: what every later process loads
+        for name, n, dt, cached in build_tables((saved.spec.key,)):
+            state = "found in the cache" if cached else f"built in {dt:.1f} s"
+            print(f"palm stages of {name}: {n} hypotheses {state} ({cache_dir()})")
         return 0
     for k in available_keys():
         o = load_object(k)

@@ -157,6 +157,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="folder to save it in (default: $HANDBENCH_USER_OBJECTS or "
         "~/.local/share/handbench/objects, where every command finds it)",
     )
+    imp.add_argument(
+        "--no-palm-stages",
+        action="store_true",
+        help="do not compute and cache the palm stages now (every design's shared part, "
+        "seconds for a scan): the first runs on the object then compute them",
+    )
     s.set_defaults(func=cmd_objects)
 
     s = sub.add_parser(

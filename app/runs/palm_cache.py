@@ -7,9 +7,11 @@ every hypothesis of one object, so that each is computed once per process and ev
 (every task, every slider move in the explorer) starts from it.
 
 Disk: ``$XDG_CACHE_HOME/handbench/palms/<key>.npz`` (``~/.cache/...``) holds a complete
-table. ``make setup`` builds the tables of the built-in objects for the default settings
-(``python -m app.runs.palm_cache``, a few seconds); a run with other settings, another hand
-file or an imported object computes its palm stages as it goes (in memory). The key hashes
+table. ``make setup`` builds the tables of the built-in objects and of the saved imports for
+the default settings (``python -m app.runs.palm_cache``, a few seconds), and ``handbench
+objects import`` builds the imported object's (a 65k-face scan: about 5 s); a run with other
+settings or another hand file computes its palm stages as it goes (in memory), and a process
+that has computed every row of a table saves it (its first use). The key hashes
 everything a palm stage depends on: the hand file, the object (``object_key``), the settings
 (``SimSettings.key()``, which carries ``ENGINE_VERSION``) and the source of the simulation
 and model code, so that a code change can never serve a stale stage. Files are written
@@ -34,7 +36,7 @@ import numpy as np
 from app.hashing import stable_hash
 from app.model.contact_set import LINK_NAMES, ContactSet
 from app.model.hand.data import load_hand_dims
-from app.model.objects import OBJECT_KEYS, load_object
+from app.model.objects import OBJECT_KEYS, available_keys, load_object
 from app.quality.settings import SimSettings
 from app.runs.keys import object_key
 from app.sim.hypothesis_sets import cached_hypotheses
@@ -89,6 +91,9 @@ class PalmTable:
         self._rows: list[PalmGrasp | None] = [None] * n
         self._lock = threading.Lock()
         self.from_disk = False
+        #: rows not yet known; when this process computes the last one, the table is saved
+        self._n_missing = n
+        self.saved = False
 
     def __len__(self) -> int:
         return len(self._rows)
@@ -105,7 +110,12 @@ class PalmTable:
             obj, hyps = load_object(self.object_name), cached_hypotheses(self.object_name)
             row = simulate_palm(_palm_kit(), obj, hyps, i, self.settings)
             with self._lock:
+                if self._rows[i] is None:
+                    self._n_missing -= 1
                 self._rows[i] = row
+                done = self._n_missing == 0 and not self.from_disk and not self.saved
+            if done:  # every row computed here: cache the table for later processes
+                self.saved = self.save()
         return row
 
     # ------------------------------------------------------------------ disk
@@ -122,6 +132,7 @@ class PalmTable:
             return False
         with self._lock:
             self._rows = list(rows)
+            self._n_missing = 0
         self.from_disk = True
         return True
 
@@ -226,14 +237,16 @@ def build_tables(
         if not cached:
             for i in range(len(table)):
                 table.get(i)
-            table.save()
+            if not table.saved:
+                table.saved = table.save()
         out.append((name, len(table), time.perf_counter() - t0, cached))
     return out
 
 
 def main() -> None:
-    """Build the built-in objects' palm tables for the default settings (``make setup``)."""
-    for name, n, dt, cached in build_tables():
+    """Build the palm tables of the built-in objects and of the saved imports for the
+    default settings (``make setup``)."""
+    for name, n, dt, cached in build_tables(available_keys()):
         state = "cached" if cached else "built"
         print(f"palm stages of {name}: {n} hypotheses {state} in {dt:.1f} s")
 

@@ -6,22 +6,28 @@ the object's convex pieces (exact GJK, ``app.sim.gjk``, in place of FCL: the pie
 compiled closing engine stopped against), the exact coarse-to-fine screening of the link's
 surface samples, the samples within tol (or the nearest one), farthest-point thinning in the
 link frame, the object's normal by central differences and the palmar test; the signed
-distance is ``app.sim.sdf_compiled`` (equal to the numpy closures to rounding). Objects
-without a compiled signed distance or without piece arrays (imported meshes) return None and
+distance is ``app.sim.sdf_compiled`` (equal to the numpy closures to rounding). An imported
+mesh (one ``MESH`` piece) takes the same steps on its distance field: the link's distance
+from ``app.sim.mesh_distance`` (exact up to tol, as the numpy path's ``link_mesh_distance``)
+and the signed distance from ``distance_field.point_sdf`` (the function the numpy path's
+``MeshSdf`` calls). Objects without either (a stand-in without piece arrays) return None and
 the caller uses the numpy path.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from functools import lru_cache
 from typing import Any
 
 import numpy as np
-from numba import njit
+from numba import errors, njit, types
+from numba.extending import overload
 
 from app.model.contact_set import ContactSet
 from app.model.hand.geometry import Shape
+from app.model.objects.distance_field import point_sdf, signed_bounds
 from app.model.objects.model import NORMAL_STEP_MM
 from app.sim import gjk
 from app.sim.closing_compiled import link_arrays, object_arrays
@@ -33,7 +39,14 @@ from app.sim.contacts import (
     _reach,
     _samples,
 )
-from app.sim.sdf_compiled import SdfProgram, object_program, sdf_point
+from app.sim.mesh_distance import MESH, mesh_distance
+from app.sim.sdf_compiled import object_program, sdf_point
+
+# numba's pedantic SSA check flags the variables of ``sdf_point`` inlined through the
+# ``object_sd`` overload (a known false alarm of nested inlining); the code is correct
+warnings.filterwarnings(
+    "ignore", message="variable '_object_sd_impl", category=errors.NumbaIRAssumptionWarning
+)
 
 LinkTables = tuple[
     np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
@@ -141,6 +154,96 @@ def _argmax_tie(d: np.ndarray, n: int, tie: float) -> int:
     return 0
 
 
+def object_sd(px: float, py: float, pz: float, src: Any) -> float:
+    """The object's signed distance at one point, for compiled callers: ``src`` is an
+    ``SdfProgram`` (analytic parts, ``sdf_point``) or a mesh's ``DistanceField.pack``
+    (``point_sdf``). Numba picks the implementation by the type of ``src`` (one compiled
+    specialisation of the caller per kind: the analytic kernels never unbox a mesh pack)."""
+    raise NotImplementedError("compiled code only")
+
+
+def object_mesh_distance(typ: int, prm: np.ndarray, R: np.ndarray, t: np.ndarray, src: Any,
+                         exact_above: float) -> float:  # fmt: skip
+    """``mesh_distance`` of a link to the mesh of ``src`` (a ``DistanceField.pack``); inf
+    for an ``SdfProgram`` (an analytic object has no ``MESH`` piece)."""
+    raise NotImplementedError("compiled code only")
+
+
+def _is_mesh_pack(src: Any) -> bool:
+    """Whether a numba type is a ``MeshPack`` (20 items, the spacing a float) rather than an
+    ``SdfProgram`` (15 arrays)."""
+    return isinstance(src, types.BaseTuple) and len(src) == 20
+
+
+def mesh_select(T: np.ndarray, samp: np.ndarray, s0: int, s1: int, cidx: np.ndarray, c0: int,
+                c1: int, assign: np.ndarray, sdist: np.ndarray, lip: float, tol: float,
+                src: Any, sel: np.ndarray) -> int:  # fmt: skip
+    """For an imported mesh (``src`` a ``DistanceField.pack``): the link's samples (rows
+    ``s0:s1`` of ``samp``, posed at ``T``) whose signed distance is <= tol, written in sample
+    order to ``sel``; their number. 0 for an ``SdfProgram`` (analytic objects keep the exact
+    screening of ``contacts_kernel``), and 0 when no sample is within tol (the caller then
+    takes those exact steps, which find the nearest sample).
+
+    The same samples as that screening, found more cheaply: the field's node bounds
+    (``signed_bounds``, ~50 ns) screen the coarse samples (a sample within tol has a coarse
+    sample whose lower bound is <= tol + L·its distance to it) and then each sample; the
+    exact value (``point_sdf``, 2–10 µs) is computed only when the bounds straddle tol."""
+    raise NotImplementedError("compiled code only")
+
+
+@njit(cache=True)
+def _mesh_select(T: np.ndarray, samp: np.ndarray, s0: int, s1: int, cidx: np.ndarray, c0: int,
+                 c1: int, assign: np.ndarray, sdist: np.ndarray, lip: float, tol: float,
+                 pk: Any, sel: np.ndarray) -> int:  # fmt: skip
+    """``mesh_select`` of a mesh pack."""
+    lo_c = np.empty(c1 - c0)
+    for c in range(c0, c1):
+        k = s0 + cidx[c]
+        x = T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2] + T[0, 3]
+        y = T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2] + T[1, 3]
+        z = T[2, 0] * samp[k, 0] + T[2, 1] * samp[k, 1] + T[2, 2] * samp[k, 2] + T[2, 3]
+        lo_c[c - c0] = signed_bounds(pk, x, y, z)[0]
+    n_sel = 0
+    for k in range(s0, s1):
+        if lo_c[assign[k]] - lip * sdist[k] > tol:
+            continue
+        x = T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2] + T[0, 3]
+        y = T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2] + T[1, 3]
+        z = T[2, 0] * samp[k, 0] + T[2, 1] * samp[k, 1] + T[2, 2] * samp[k, 2] + T[2, 3]
+        lo, hi = signed_bounds(pk, x, y, z)
+        if lo > tol:
+            continue
+        if hi <= tol or point_sdf(pk, x, y, z) <= tol:
+            sel[n_sel] = k
+            n_sel += 1
+    return n_sel
+
+
+@overload(mesh_select, jit_options={"cache": True})
+def _mesh_select_impl(T, samp, s0, s1, cidx, c0, c1, assign, sdist, lip, tol, src, sel):  # noqa: ANN001, ANN202, E501
+    if _is_mesh_pack(src):
+        return lambda T, samp, s0, s1, cidx, c0, c1, assign, sdist, lip, tol, src, sel: (
+            _mesh_select(T, samp, s0, s1, cidx, c0, c1, assign, sdist, lip, tol, src, sel)
+        )
+    return lambda T, samp, s0, s1, cidx, c0, c1, assign, sdist, lip, tol, src, sel: 0
+
+
+@overload(object_sd, inline="always", jit_options={"cache": True})
+def _object_sd_impl(px, py, pz, src):  # noqa: ANN001, ANN202 (numba types)
+    if _is_mesh_pack(src):
+        return lambda px, py, pz, src: point_sdf(src, px, py, pz)
+    return lambda px, py, pz, src: sdf_point(px, py, pz, src)
+
+
+@overload(object_mesh_distance, jit_options={"cache": True})
+def _object_mesh_distance_impl(typ, prm, R, t, src, exact_above):  # noqa: ANN001, ANN202
+    if _is_mesh_pack(src):
+        return lambda typ, prm, R, t, src, exact_above: mesh_distance(
+            typ, prm, R, t, src, exact_above
+        )
+    return lambda typ, prm, R, t, src, exact_above: np.inf
+
+
 @njit(cache=True)
 def contacts_kernel(
     T_links: np.ndarray,
@@ -168,7 +271,7 @@ def contacts_kernel(
     ospheres: np.ndarray,
     centroid: np.ndarray,
     r_obj: float,
-    prog: SdfProgram,
+    prog: Any,
     tol: float,
     max_pts: int,
     cos_lim: float,
@@ -182,7 +285,9 @@ def contacts_kernel(
     Screening as the numpy path's, exact, with per-sample bounds: a sample at distance
     ``sdist`` from its coarse sample has a signed distance >= the coarse value - L·sdist (L
     the Lipschitz bound), so only samples whose bound is <= max(tol, the smallest coarse
-    value) are evaluated; pieces whose bounding sphere is farther than tol are not queried."""
+    value) are evaluated; pieces whose bounding sphere is farther than tol are not queried.
+    ``prog``: the object's ``SdfProgram``, or an imported mesh's ``DistanceField.pack``
+    (its one piece is a ``MESH`` row, whose sphere must be infinite)."""
     L = len(T_links)
     P = np.empty((L * max_pts, 3))
     N = np.empty((L * max_pts, 3))
@@ -206,69 +311,76 @@ def contacts_kernel(
             )
             if math.sqrt(ex * ex + ey * ey + ez * ez) - reach[l] - ospheres[p, 3] > tol:
                 continue
-            d = gjk.shape_distance_nbr(
-                ltyp[l], lprm[l], Tb[:3, :3], Tb[:3, 3], otyp[p], oprm[p], oR[p], ot[p],
-                verts, nbr_start, nbr, 0, 0, vstart[p], vstart[p + 1],
-            )  # fmt: skip
+            if otyp[p] == MESH:  # exact when it may be <= tol, else a lower bound above
+                d = object_mesh_distance(ltyp[l], lprm[l], Tb[:3, :3], Tb[:3, 3], prog, tol)
+            else:
+                d = gjk.shape_distance_nbr(
+                    ltyp[l], lprm[l], Tb[:3, :3], Tb[:3, 3], otyp[p], oprm[p], oR[p], ot[p],
+                    verts, nbr_start, nbr, 0, 0, vstart[p], vstart[p + 1],
+                )  # fmt: skip
             queries += 1
             if d < best:
                 best = d
         if best > tol:
             continue
-        # coarse samples, then the samples whose coarse sample may be within tol
         c0, c1 = coff[l], coff[l + 1]
         s0, s1 = soff[l], soff[l + 1]
-        # (super-coarse samples first: a coarse sample whose bound from its super-coarse
-        # sample keeps all its samples above tol gets that bound instead of its value)
-        sd_c = np.empty(c1 - c0)
-        exact = np.zeros(c1 - c0, np.bool_)
-        for sweep in range(3):
-            for c in range(c0, c1):
-                if exact[c - c0]:
-                    continue
-                if sweep == 0 and sup[c] != c - c0:
-                    continue
-                if sweep == 1:
-                    lb = sd_c[sup[c]] - lip * dcs[c]
-                    if lb - lip * cmax[c] > tol:
-                        sd_c[c - c0] = lb
-                        continue
-                k = s0 + cidx[c]
-                x = T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2]
-                y = T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2]
-                z = T[2, 0] * samp[k, 0] + T[2, 1] * samp[k, 1] + T[2, 2] * samp[k, 2]
-                sd_c[c - c0] = sdf_point(x + T[0, 3], y + T[1, 3], z + T[2, 3], prog)
-                exact[c - c0] = True
-            if sweep == 1:
-                m_min = np.inf
-                for c in range(c1 - c0):
-                    if exact[c] and sd_c[c] < m_min:
-                        m_min = sd_c[c]
-                if m_min <= tol:
-                    break  # else (a grazing contact): every coarse value, for the nearest
-        m_min = np.inf
-        for c in range(c1 - c0):
-            if exact[c] and sd_c[c] < m_min:
-                m_min = sd_c[c]
-        bound = max(tol, m_min)
         sel = np.empty(s1 - s0, np.int64)
-        n_sel = 0
-        near, near_v = -1, np.inf
-        for k in range(s0, s1):
-            if sd_c[assign[k]] - lip * sdist[k] > bound:
-                continue
-            x = T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2] + T[0, 3]
-            y = T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2] + T[1, 3]
-            z = T[2, 0] * samp[k, 0] + T[2, 1] * samp[k, 1] + T[2, 2] * samp[k, 2] + T[2, 3]
-            v = sdf_point(x, y, z, prog)
-            if v <= tol:
-                sel[n_sel] = k
-                n_sel += 1
-            if v < near_v:
-                near, near_v = k, v
+        # an imported mesh: the samples within tol found from the field's bounds, exact
+        # values only where they straddle tol (``mesh_select``); when there is none (a
+        # grazing contact; always for analytic objects), the exact steps below
+        n_sel = mesh_select(T, samp, s0, s1, cidx, c0, c1, assign, sdist, lip, tol, prog, sel)
         if n_sel == 0:
-            sel[0] = near
-            n_sel = 1
+            # coarse samples, then the samples whose coarse sample may be within tol
+            # (super-coarse samples first: a coarse sample whose bound from its super-coarse
+            # sample keeps all its samples above tol gets that bound instead of its value)
+            sd_c = np.empty(c1 - c0)
+            exact = np.zeros(c1 - c0, np.bool_)
+            for sweep in range(3):
+                for c in range(c0, c1):
+                    if exact[c - c0]:
+                        continue
+                    if sweep == 0 and sup[c] != c - c0:
+                        continue
+                    if sweep == 1:
+                        lb = sd_c[sup[c]] - lip * dcs[c]
+                        if lb - lip * cmax[c] > tol:
+                            sd_c[c - c0] = lb
+                            continue
+                    k = s0 + cidx[c]
+                    x = T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2]
+                    y = T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2]
+                    z = T[2, 0] * samp[k, 0] + T[2, 1] * samp[k, 1] + T[2, 2] * samp[k, 2]
+                    sd_c[c - c0] = object_sd(x + T[0, 3], y + T[1, 3], z + T[2, 3], prog)
+                    exact[c - c0] = True
+                if sweep == 1:
+                    m_min = np.inf
+                    for c in range(c1 - c0):
+                        if exact[c] and sd_c[c] < m_min:
+                            m_min = sd_c[c]
+                    if m_min <= tol:
+                        break  # else (a grazing contact): every coarse value, for the nearest
+            m_min = np.inf
+            for c in range(c1 - c0):
+                if exact[c] and sd_c[c] < m_min:
+                    m_min = sd_c[c]
+            bound = max(tol, m_min)
+            near, near_v = -1, np.inf
+            for k in range(s0, s1):
+                if sd_c[assign[k]] - lip * sdist[k] > bound:
+                    continue
+                x = T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2] + T[0, 3]
+                y = T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2] + T[1, 3]
+                z = T[2, 0] * samp[k, 0] + T[2, 1] * samp[k, 1] + T[2, 2] * samp[k, 2] + T[2, 3]
+                v = object_sd(x, y, z, prog)
+                if v <= tol:
+                    sel[n_sel] = k
+                    n_sel += 1
+                if v < near_v:
+                    near, near_v = k, v
+            if n_sel == 0:
+                sel[0] = near
+                n_sel = 1
         # farthest-point thinning in the link frame
         chosen = np.empty(min(n_sel, max_pts), np.int64)
         if n_sel <= max_pts:
@@ -308,10 +420,10 @@ def contacts_kernel(
             g = np.empty(3)
             for r in range(3):
                 q[r] += h
-                fp = sdf_point(q[0], q[1], q[2], prog)
+                fp = object_sd(q[0], q[1], q[2], prog)
                 q[r] -= h
                 q[r] -= h
-                fm = sdf_point(q[0], q[1], q[2], prog)
+                fm = object_sd(q[0], q[1], q[2], prog)
                 q[r] += h
                 g[r] = (fp - fm) / (2 * h)
             nrm = math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
@@ -327,6 +439,24 @@ def contacts_kernel(
     return P, N, link, pal, n_out, queries
 
 
+_MESH_SPHERES: dict[int, tuple[Any, np.ndarray]] = {}
+
+
+def _kernel_spheres(arr: Any) -> np.ndarray:
+    """``piece_spheres`` with the ``MESH`` row made infinite (it has no vertices to bound)."""
+    if arr.mesh is None:
+        return piece_spheres(arr)
+    hit = _MESH_SPHERES.get(id(arr))
+    if hit is not None and hit[0] is arr:
+        return hit[1]
+    out = piece_spheres(arr).copy()
+    out[arr.typ == MESH, 3] = np.inf
+    if len(_MESH_SPHERES) >= 64:
+        _MESH_SPHERES.clear()
+    _MESH_SPHERES[id(arr)] = (arr, out)
+    return out
+
+
 def contacts_compiled(
     obj: Any,
     names: list[str],
@@ -336,17 +466,20 @@ def contacts_compiled(
     palmar_angle_deg: float,
     counter: list[int] | None = None,
 ) -> ContactSet | None:
-    """``contacts_of_links`` on the compiled path, or None when the object has no compiled
-    signed distance or piece arrays (the caller then uses the numpy path)."""
-    prog = object_program(obj)
+    """``contacts_of_links`` on the compiled path (analytic objects and imported meshes with
+    their distance field), or None when the object has neither a compiled signed distance
+    nor a mesh pack, or no piece arrays (the caller then uses the numpy path)."""
     arr = object_arrays(obj)
-    if prog is None or arr is None:
+    if arr is None:
+        return None
+    prog = arr.mesh if arr.mesh is not None else object_program(obj)
+    if prog is None:
         return None
     tables = link_tables(tuple(shapes), float(settings.sample_spacing_mm))
     P, N, link, pal, n, queries = contacts_kernel(
         np.ascontiguousarray(T_object_links, float), *tables,
         arr.typ, arr.prm, arr.R, arr.t, arr.vstart, arr.verts, arr.nbr_start, arr.nbr,
-        piece_spheres(arr),
+        _kernel_spheres(arr),
         np.asarray(obj.centroid_object, float), float(obj.max_radius), prog,
         float(settings.contact_tol_mm), int(settings.max_points_per_link),
         float(np.cos(np.deg2rad(palmar_angle_deg))), SDF_LIPSCHITZ, NORMAL_STEP_MM,

@@ -37,47 +37,55 @@ from app.sim import gjk
 MESH = 9
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _point_core_distance(typ: int, prm: np.ndarray, R: np.ndarray, t: np.ndarray,
                          x: np.ndarray) -> float:  # fmt: skip
     """Distance from point x to the core of a capsule (its segment) or a box (the solid)."""
-    lx = np.empty(3)
-    for i in range(3):
-        lx[i] = R[0, i] * (x[0] - t[0]) + R[1, i] * (x[1] - t[1]) + R[2, i] * (x[2] - t[2])
-    if typ == gjk.CAPSULE:
-        z = min(max(lx[2], -prm[1]), prm[1])
-        return math.sqrt(lx[0] * lx[0] + lx[1] * lx[1] + (lx[2] - z) * (lx[2] - z))
-    s = 0.0
-    for i in range(3):
-        d = abs(lx[i]) - prm[i]
-        if d > 0:
-            s += d * d
-    return math.sqrt(s)
+    return _xyz_core_distance(typ, prm, R, t, x[0], x[1], x[2])
 
 
 @njit(cache=True, inline="always")
-def _seg_seg2(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> float:
+def _xyz_core_distance(typ: int, prm: np.ndarray, R: np.ndarray, t: np.ndarray, x0: float,
+                       x1: float, x2: float) -> float:  # fmt: skip
+    """``_point_core_distance`` of the point (x0, x1, x2) (scalars: no array is made)."""
+    d0, d1, d2 = x0 - t[0], x1 - t[1], x2 - t[2]
+    l0 = R[0, 0] * d0 + R[1, 0] * d1 + R[2, 0] * d2
+    l1 = R[0, 1] * d0 + R[1, 1] * d1 + R[2, 1] * d2
+    l2 = R[0, 2] * d0 + R[1, 2] * d1 + R[2, 2] * d2
+    if typ == gjk.CAPSULE:
+        z = min(max(l2, -prm[1]), prm[1])
+        return math.sqrt(l0 * l0 + l1 * l1 + (l2 - z) * (l2 - z))
+    e0 = max(abs(l0) - prm[0], 0.0)
+    e1 = max(abs(l1) - prm[1], 0.0)
+    e2 = max(abs(l2) - prm[2], 0.0)
+    return math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+
+
+@njit(cache=True, inline="always")
+def _seg_seg2(px1: float, py1: float, pz1: float, qx1: float, qy1: float, qz1: float,
+              px2: float, py2: float, pz2: float, qx2: float, qy2: float, qz2: float
+              ) -> float:  # fmt: skip
     """Squared distance between segments p1q1 and p2q2 (Ericson, Real-Time Collision
-    Detection §5.1.9)."""
-    d1 = q1 - p1
-    d2 = q2 - p2
-    r = p1 - p2
-    a = d1 @ d1
-    e = d2 @ d2
-    f = d2 @ r
+    Detection §5.1.9), on scalars."""
+    d1x, d1y, d1z = qx1 - px1, qy1 - py1, qz1 - pz1
+    d2x, d2y, d2z = qx2 - px2, qy2 - py2, qz2 - pz2
+    rx, ry, rz = px1 - px2, py1 - py2, pz1 - pz2
+    a = d1x * d1x + d1y * d1y + d1z * d1z
+    e = d2x * d2x + d2y * d2y + d2z * d2z
+    f = d2x * rx + d2y * ry + d2z * rz
     eps = 1e-18
     if a <= eps and e <= eps:
-        return float(r @ r)
+        return rx * rx + ry * ry + rz * rz
     if a <= eps:
         s = 0.0
         t = min(max(f / e, 0.0), 1.0)
     else:
-        c = d1 @ r
+        c = d1x * rx + d1y * ry + d1z * rz
         if e <= eps:
             t = 0.0
             s = min(max(-c / a, 0.0), 1.0)
         else:
-            b = d1 @ d2
+            b = d1x * d2x + d1y * d2y + d1z * d2z
             den = a * e - b * b
             s = min(max((b * f - c * e) / den, 0.0), 1.0) if den > eps else 0.0
             t = (b * s + f) / e
@@ -87,8 +95,17 @@ def _seg_seg2(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) ->
             elif t > 1.0:
                 t = 1.0
                 s = min(max((b - c) / a, 0.0), 1.0)
-    w = p1 + d1 * s - (p2 + d2 * t)
-    return float(w @ w)
+    wx = px1 + d1x * s - (px2 + d2x * t)
+    wy = py1 + d1y * s - (py2 + d2y * t)
+    wz = pz1 + d1z * s - (pz2 + d2z * t)
+    return wx * wx + wy * wy + wz * wz
+
+
+@njit(cache=True, inline="always")
+def _cross_dot(ux: float, uy: float, uz: float, vx: float, vy: float, vz: float, nx: float,
+               ny: float, nz: float) -> float:  # fmt: skip
+    """(u × v) · n."""
+    return (uy * vz - uz * vy) * nx + (uz * vx - ux * vz) * ny + (ux * vy - uy * vx) * nz
 
 
 @njit(cache=True)
@@ -97,28 +114,37 @@ def segment_triangle_distance(
 ) -> float:
     """Exact distance between segment s0s1 and triangle abc (0 when they meet): the segment
     crossing the triangle, else the least of its ends against the triangle and the segment
-    against the triangle's three edges."""
-    n = np.cross(b - a, c - a)
-    e0 = n @ (s0 - a)
-    e1 = n @ (s1 - a)
+    against the triangle's three edges. Scalar arithmetic throughout (no array is made: this
+    is the inner loop of a mesh query)."""
+    ax, ay, az = a[0], a[1], a[2]
+    bx, by, bz = b[0], b[1], b[2]
+    cx, cy, cz = c[0], c[1], c[2]
+    ux, uy, uz = bx - ax, by - ay, bz - az
+    vx, vy, vz = cx - ax, cy - ay, cz - az
+    nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    e0 = nx * (s0[0] - ax) + ny * (s0[1] - ay) + nz * (s0[2] - az)
+    e1 = nx * (s1[0] - ax) + ny * (s1[1] - ay) + nz * (s1[2] - az)
     if (e0 <= 0.0 <= e1 or e1 <= 0.0 <= e0) and e0 != e1:
-        x = s0 + (s1 - s0) * (e0 / (e0 - e1))
+        w = e0 / (e0 - e1)
+        xx = s0[0] + (s1[0] - s0[0]) * w
+        xy = s0[1] + (s1[1] - s0[1]) * w
+        xz = s0[2] + (s1[2] - s0[2]) * w
         # inside the triangle: the three edge tests agree in sign with n
         if (
-            np.cross(b - a, x - a) @ n >= 0.0
-            and np.cross(c - b, x - b) @ n >= 0.0
-            and np.cross(a - c, x - c) @ n >= 0.0
+            _cross_dot(ux, uy, uz, xx - ax, xy - ay, xz - az, nx, ny, nz) >= 0.0
+            and _cross_dot(cx - bx, cy - by, cz - bz, xx - bx, xy - by, xz - bz, nx, ny, nz) >= 0.0
+            and _cross_dot(ax - cx, ay - cy, az - cz, xx - cx, xy - cy, xz - cz, nx, ny, nz) >= 0.0
         ):
             return 0.0
-    best = np.inf
-    for q in (s0, s1):
-        cx, cy, cz, _ = closest_on_triangle(q[0], q[1], q[2], a, b, c)
-        d2 = (q[0] - cx) ** 2 + (q[1] - cy) ** 2 + (q[2] - cz) ** 2
-        best = min(best, d2)
-    best = min(best, _seg_seg2(s0, s1, a, b))
-    best = min(best, _seg_seg2(s0, s1, b, c))
-    best = min(best, _seg_seg2(s0, s1, c, a))
-    return float(math.sqrt(best))
+    qx, qy, qz, _ = closest_on_triangle(s0[0], s0[1], s0[2], a, b, c)
+    best = (s0[0] - qx) ** 2 + (s0[1] - qy) ** 2 + (s0[2] - qz) ** 2
+    qx, qy, qz, _ = closest_on_triangle(s1[0], s1[1], s1[2], a, b, c)
+    best = min(best, (s1[0] - qx) ** 2 + (s1[1] - qy) ** 2 + (s1[2] - qz) ** 2)
+    p0, p1, p2, r0, r1, r2 = s0[0], s0[1], s0[2], s1[0], s1[1], s1[2]
+    best = min(best, _seg_seg2(p0, p1, p2, r0, r1, r2, ax, ay, az, bx, by, bz))
+    best = min(best, _seg_seg2(p0, p1, p2, r0, r1, r2, bx, by, bz, cx, cy, cz))
+    best = min(best, _seg_seg2(p0, p1, p2, r0, r1, r2, cx, cy, cz, ax, ay, az))
+    return math.sqrt(best)
 
 
 #: Spacing (mm) of the capsule axis points whose field bounds screen a query.
@@ -133,16 +159,10 @@ def _bucket_triangles(
     typ: int, prm: np.ndarray, R: np.ndarray, t: np.ndarray, b: int, b_start: np.ndarray,
     b_ids: np.ndarray, V: np.ndarray, F: np.ndarray, tri_c: np.ndarray, tri_r: np.ndarray,
     stamp: np.ndarray, qid: int, margin: float, best: float, tverts: np.ndarray,
+    s0: np.ndarray, s1: np.ndarray, eye: np.ndarray, zero: np.ndarray,
 ) -> float:  # fmt: skip
-    """min(best, the link's exact distance to each triangle of bucket b not yet seen)."""
-    eye = np.eye(3)
-    zero = np.zeros(3)
-    tri_prm = np.zeros(3)
-    s0 = np.empty(3)
-    s1 = np.empty(3)
-    for i in range(3):
-        s0[i] = t[i] - R[i, 2] * prm[1]
-        s1[i] = t[i] + R[i, 2] * prm[1]
+    """min(best, the link's exact distance to each triangle of bucket b not yet seen);
+    ``s0``, ``s1``: a capsule's segment ends; ``eye``, ``zero``: a triangle's GJK frame."""
     for e in range(b_start[b], b_start[b + 1]):
         f = b_ids[e]
         if stamp[f] == qid:
@@ -156,7 +176,7 @@ def _bucket_triangles(
             for i in range(3):
                 for j in range(3):
                     tverts[i, j] = V[F[f, i], j]
-            d = gjk.shape_distance(typ, prm, R, t, gjk.POINTS, tri_prm, eye, zero, tverts,
+            d = gjk.shape_distance(typ, prm, R, t, gjk.POINTS, zero, eye, zero, tverts,
                                    0, 0, 0, 3)  # fmt: skip
         if d < best:
             best = d
@@ -216,6 +236,13 @@ def mesh_distance(
     bc = np.empty(3)
     bq = np.empty(3)
     tverts = np.empty((3, 3))
+    eye = np.eye(3)
+    zero = np.zeros(3)
+    s0 = np.empty(3)
+    s1 = np.empty(3)
+    for i in range(3):
+        s0[i] = t[i] - R[i, 2] * prm[1]
+        s1[i] = t[i] + R[i, 2] * prm[1]
     # blocks of BLOCK³ buckets first: a block farther from the core than best is skipped
     blk_half_diag = 0.8660254037844387 * BLOCK * b_size
     for si in range(lo_b[0] // BLOCK, hi_b[0] // BLOCK + 1):
@@ -242,5 +269,5 @@ def mesh_distance(
                                 continue
                             best = _bucket_triangles(typ, prm, R, t, b, b_start, b_ids, V, F,
                                                      tri_c, tri_r, stamp, qid, margin, best,
-                                                     tverts)  # fmt: skip
+                                                     tverts, s0, s1, eye, zero)  # fmt: skip
     return best
