@@ -10,11 +10,10 @@ import pytest
 
 from app.errors import WorkerCrashError
 from app.model.design import ThumbDesign
-from app.quality.outcome import GraspOutcome
 from app.quality.settings import SimSettings
 from app.runs.executors import LocalExecutor, run_task_marked
 from app.runs.keys import design_key, object_key
-from app.runs.store import ResultStore
+from app.runs.store import ResultStore, StoredOutcome
 from app.runs.sweep import execute_tasks
 from app.runs.tasks import Task
 from app.sim.hypothesis_sets import cached_hypotheses
@@ -22,7 +21,7 @@ from app.sim.hypothesis_sets import cached_hypotheses
 CRASH_INDEX = 7
 
 
-def crash_at_index(task: Task, marker_dir: str) -> list[tuple[int, str, GraspOutcome]]:
+def crash_at_index(task: Task, marker_dir: str) -> list[tuple[int, str, StoredOutcome]]:
     """The real worker, but its simulation segfaults on hypothesis CRASH_INDEX (after the
     worker's own marking of it)."""
     import app.runs.tasks as tasks_mod

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+import pickle
 import signal
 import sqlite3
 import subprocess
@@ -18,7 +19,7 @@ from app.errors import StoreError
 from app.hashing import stable_hash
 from app.model.contact_set import ContactSet
 from app.quality.outcome import GraspOutcome
-from app.runs.store import SCHEMA_VERSION, ResultStore, default_store_path
+from app.runs.store import SCHEMA_VERSION, ResultStore, default_store_path, encode
 from tests.utils import make_outcome
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -71,6 +72,13 @@ def test_round_trip_exact(tmp_path: Path) -> None:
         assert ro.count(*KEYS) == len(outs)
         with pytest.raises(StoreError, match="read-only"):
             ro.put_many(*KEYS, outs)
+    # outcomes a pool worker encoded (and pickled) store the same rows
+    encoded = {gh: pickle.loads(pickle.dumps(encode(o))) for gh, o in outs.items()}
+    with ResultStore(tmp_path / "e.sqlite") as store:
+        store.put_many(*KEYS, encoded)
+        got_e = store.get_many(*KEYS, list(outs))
+    for gh, o in outs.items():
+        assert got_e[gh].same_as(o), gh
 
 
 def test_put_twice_no_duplicates_and_summary(tmp_path: Path) -> None:

@@ -21,8 +21,8 @@ from typing import Any
 
 from app.errors import WorkerCrashError
 from app.model.design import ThumbDesign
-from app.quality.outcome import GraspOutcome
 from app.quality.settings import SimSettings
+from app.runs.store import StoredOutcome, encode
 from app.runs.tasks import Task, run_task
 
 #: Bytes of a worker's marker file: "<object> <index>" padded with blanks.
@@ -48,10 +48,10 @@ def _marker_map(marker_dir: str) -> mmap.mmap:
     return mm
 
 
-def run_task_marked(task: Task, marker_dir: str) -> list[tuple[int, str, GraspOutcome]]:
+def run_task_marked(task: Task, marker_dir: str) -> list[tuple[int, str, StoredOutcome]]:
     """``run_task`` in a pool worker, keeping "<object> <index>" of the hypothesis it is on in
     ``<marker_dir>/<pid>`` (blank between tasks), so that the parent can name it if this
-    process dies."""
+    process dies. The outcomes come back in the store's encoding (``encode``)."""
     mm = _marker_map(marker_dir)
     name = task.object_name.encode()
 
@@ -61,7 +61,8 @@ def run_task_marked(task: Task, marker_dir: str) -> list[tuple[int, str, GraspOu
 
     out = run_task(task, on_hypothesis=mark)
     mm[:] = b" " * MARKER_BYTES
-    return out
+    # encoded here: the parent, the store's only writer, then only inserts the rows
+    return [(di, gh, encode(o)) for di, gh, o in out]
 
 
 def init_worker(object_names: Sequence[str], ignore_sigint: bool = False, nice: int = 0) -> None:
@@ -134,7 +135,7 @@ class Executor:
 
     def run(
         self, tasks: Sequence[Task], cancel: threading.Event | None
-    ) -> Iterator[tuple[Task, list[tuple[int, str, GraspOutcome]]]]:
+    ) -> Iterator[tuple[Task, list[tuple[int, str, StoredOutcome]]]]:
         raise NotImplementedError
 
     def close(self) -> None:

@@ -157,6 +157,30 @@ def _encode(o: GraspOutcome) -> tuple[Any, ...]:
     )
 
 
+class EncodedOutcome:
+    """An outcome already in the ``outcomes`` table's column layout (``encode``): pool
+    workers send these, so that the parent (the store's only writer, sharing the cores with
+    the workers) only inserts rows instead of unpickling arrays and encoding them."""
+
+    __slots__ = ("row",)
+
+    def __init__(self, row: tuple[Any, ...]) -> None:
+        self.row = row
+        """The column values after the four keys (``_encode``)."""
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (EncodedOutcome, (self.row,))
+
+
+#: What ``ResultStore.put_many`` takes: an outcome, or one already encoded.
+StoredOutcome = GraspOutcome | EncodedOutcome
+
+
+def encode(o: GraspOutcome) -> EncodedOutcome:
+    """``o`` in the store's column layout (decoded by every read as the same outcome)."""
+    return EncodedOutcome(_encode(o))
+
+
 def _decode(row: Sequence[Any]) -> GraspOutcome:
     """Inverse of :func:`_encode` (``row`` = the same columns)."""
     is_fc, is_c, eps, nq, q, k, dts, pts, nrm, links, palmar, reasons, extra = row
@@ -479,16 +503,18 @@ class ResultStore:
         design_key: str,
         object_key: str,
         settings_key: str,
-        outcomes: Mapping[str, GraspOutcome],
+        outcomes: Mapping[str, StoredOutcome],
     ) -> None:
-        """Store ``outcomes`` (gh_id → outcome) in one transaction; existing rows are replaced.
+        """Store ``outcomes`` (gh_id → outcome, or one already ``encode``d) in one
+        transaction; existing rows are replaced.
 
         Atomic: all rows land or none (also when called inside :meth:`transaction`, the
         outer transaction decides).
         """
         self._writable()
         rows = [
-            (design_key, object_key, settings_key, str(gh), *_encode(o))
+            (design_key, object_key, settings_key, str(gh),
+             *(o.row if isinstance(o, EncodedOutcome) else _encode(o)))
             for gh, o in outcomes.items()
         ]
         with self.transaction(), self._guard() as db:

@@ -17,13 +17,12 @@ from dataclasses import dataclass
 from app.errors import SettingsError
 from app.model.design import ThumbDesign
 from app.model.objects import OBJECT_KEYS, load_object
-from app.quality.outcome import GraspOutcome
 from app.quality.scores import DesignScore, ObjectScore
 from app.quality.settings import SimSettings
 from app.runs.executors import Executor, InlineExecutor, LocalExecutor
 from app.runs.keys import design_key, object_key
 from app.runs.progress import Progress
-from app.runs.store import ResultStore
+from app.runs.store import ResultStore, StoredOutcome
 from app.runs.tasks import DEFAULT_CHUNK, Task, plan_tasks
 from app.sim.hypothesis_sets import cached_hypotheses
 
@@ -82,7 +81,7 @@ def execute_tasks(
     try:
         for task, results in executor.run(tasks, cancel):
             okey = object_key_of(task.object_name)
-            by_design: dict[int, dict[str, GraspOutcome]] = {}
+            by_design: dict[int, dict[str, StoredOutcome]] = {}
             for di, gh_id, outcome in results:
                 by_design.setdefault(di, {})[gh_id] = outcome
             with store.transaction():
