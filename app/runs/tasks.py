@@ -67,6 +67,9 @@ def run_task(
     hyps = hypotheses_of(task.object_name, task.hypothesis_set)
     s = task.settings
     kits = [cached_kit(*d.as_dict().values()) for d in task.designs]  # type: ignore[arg-type]
+    # per design: its base stage's key (CMC angle, tilt, the base kit's MCP) and kit
+    open_thumbs = [(d.cmc_deg, d.cmc_tilt, base_mcp_deg(d)) for d in task.designs]
+    base_kits = [base_kit(d) for d in task.designs]
     out: list[tuple[int, str, GraspOutcome]] = []
     bf = isinstance(hyps, BruteForceHypotheses)
     palms = None if bf else palm_table(task.object_name, s)
@@ -80,11 +83,9 @@ def run_task(
         # the thumbless hand: one per hypothesis for every design (the process' palm table)
         palm: PalmGrasp | None = palms.get(i) if palms is not None else None
         h, fingers = (hyps.approach_line(i), ALL_FINGERS) if bf else (hyps, None)
-        for di, (d, kit) in enumerate(zip(task.designs, kits, strict=True)):
-            open_thumb = (d.cmc_deg, d.cmc_tilt, base_mcp_deg(d))
+        for di, (kit, open_thumb, bk) in enumerate(zip(kits, open_thumbs, base_kits, strict=True)):
             base = bases.get(open_thumb)
             if base is None:
-                bk = base_kit(d)
                 if palm is None:
                     palm = simulate_palm(bk, obj, h, i, s, fingers=fingers)
                 base = simulate_base(bk, obj, h, i, s, fingers=fingers, palm=palm)

@@ -331,15 +331,15 @@ def _advance(
 #: Joint rate vectors of the sequential stages (never written).
 _UNIT = np.eye(3)
 
-_EVENT_NAMES: dict[tuple[str, tuple[bool, ...], str], str] = {}
+_EVENT_NAMES: dict[tuple[object, ...], str] = {}
 
 
 def _event_name(finger: str, v: np.ndarray, kind: str) -> str:
     """'thumb:[1]:contact': the finger, the joints a stage moved, why it stopped."""
-    key = (finger, tuple(bool(x) for x in v > 0), kind)
+    key = (finger, v[0] > 0, v[1] > 0, v[2] > 0, kind)
     name = _EVENT_NAMES.get(key)
     if name is None:
-        name = f"{finger}:{[i for i, on in enumerate(key[1]) if on]}:{kind}"
+        name = f"{finger}:{[i for i in range(3) if key[1 + i]]}:{kind}"
         _EVENT_NAMES[key] = name
     return name
 

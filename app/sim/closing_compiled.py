@@ -630,6 +630,14 @@ def chain_arrays(chain: FingerChain) -> ChainArrays:
 _CHAIN_CACHE: dict[int, tuple[FingerChain, ChainArrays]] = {}
 
 
+#: The indices set in a (3,) mask, by the mask's bits (1 << i for index i).
+_INDEX_SETS = tuple(tuple(i for i in range(3) if m >> i & 1) for m in range(8))
+
+
+def _mask_code(mask: np.ndarray) -> int:
+    return int(mask[0]) | int(mask[1]) << 1 | int(mask[2]) << 2
+
+
 def advance_stage_compiled(
     chain: FingerChain,
     T_object_palm: np.ndarray,
@@ -664,13 +672,7 @@ def advance_stage_compiled(
         is_obj, m, sph, float(tol), int(max_steps), REFINE_ITERS, REFINE_BAND, counters,
         _pack(arrays),
     )  # fmt: skip
-    lk, jt = links.tolist(), joints.tolist()
-    return (
-        qn,
-        EVENT_KINDS[code],
-        tuple(i for i in range(3) if lk[i]),
-        tuple(i for i in range(3) if jt[i]),
-    )
+    return qn, EVENT_KINDS[code], _INDEX_SETS[_mask_code(links)], _INDEX_SETS[_mask_code(joints)]
 
 
 def approach_compiled(
