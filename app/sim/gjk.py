@@ -369,49 +369,49 @@ SEGMENT_CYLINDER_ITERS = 60
 
 
 @njit(cache=True, inline="always")
-def _cylinder_gap(r: float, h: float, x: float, y: float, z: float, out: np.ndarray) -> None:
+def _cylinder_gap(r: float, h: float, x: float, y: float, z: float) -> tuple[float, float, float]:
     """The vector from a solid cylinder's nearest point (radius r, half length h, axis z) to
-    the point (x, y, z) -> ``out``; zero inside."""
+    the point (x, y, z); zero inside."""
     rho = math.sqrt(x * x + y * y)
     k = 1.0 - r / rho if rho > r else 0.0
-    out[0] = x * k
-    out[1] = y * k
-    out[2] = z - h if z > h else (z + h if z < -h else 0.0)
+    gz = z - h if z > h else (z + h if z < -h else 0.0)
+    return x * k, y * k, gz
 
 
 @njit(cache=True)
-def _segment_cylinder(r: float, h: float, p0: np.ndarray, p1: np.ndarray) -> float:
-    """Distance from the segment p0–p1 to a solid cylinder (radius r, half length h, axis z;
-    the points in its frame), 0 when they meet. The distance of p(t) = p0 + t (p1 − p0) to a
+def _segment_cylinder(
+    r: float, h: float, ax: float, ay: float, az: float, bx: float, by: float, bz: float
+) -> float:
+    """Distance from the segment a–b to a solid cylinder (radius r, half length h, axis z;
+    the points in its frame), 0 when they meet. The distance of p(t) = a + t (b − a) to a
     convex set is convex in t and differentiable where positive, so the minimum is where the
-    derivative's sign, sign(gap(p(t)) · (p1 − p0)), changes: bisection to 2**-60 of the
+    derivative's sign, sign(gap(p(t)) · (b − a)), changes: bisection to 2**-60 of the
     segment, the value then exact to rounding (the error is second order in t). GJK's
     iteration converges only linearly on the cylinder's curved side (up to ``MAX_ITERS``
-    steps when a capsule lies along the wall); this is a few dozen flops per step."""
-    g = np.empty(3)
-    d0, d1, d2 = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
-    _cylinder_gap(r, h, p0[0], p0[1], p0[2], g)
-    s0 = g[0] * d0 + g[1] * d1 + g[2] * d2
-    if g[0] == 0.0 and g[1] == 0.0 and g[2] == 0.0:
+    steps when a capsule lies along the wall); this is a few dozen flops per step, in
+    scalars (no arrays: numba's small allocations would cost as much as the arithmetic)."""
+    d0, d1, d2 = bx - ax, by - ay, bz - az
+    g0, g1, g2 = _cylinder_gap(r, h, ax, ay, az)
+    if g0 == 0.0 and g1 == 0.0 and g2 == 0.0:
         return 0.0
-    if s0 >= 0.0:  # moving along the segment only goes away: p0 is nearest
-        return math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
-    _cylinder_gap(r, h, p1[0], p1[1], p1[2], g)
-    if g[0] == 0.0 and g[1] == 0.0 and g[2] == 0.0:
+    if g0 * d0 + g1 * d1 + g2 * d2 >= 0.0:  # moving along the segment only goes away
+        return math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
+    g0, g1, g2 = _cylinder_gap(r, h, bx, by, bz)
+    if g0 == 0.0 and g1 == 0.0 and g2 == 0.0:
         return 0.0
-    if g[0] * d0 + g[1] * d1 + g[2] * d2 <= 0.0:  # p1 is nearest
-        return math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
+    if g0 * d0 + g1 * d1 + g2 * d2 <= 0.0:  # b is nearest
+        return math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
     lo, hi = 0.0, 1.0
     best = np.inf
     for _ in range(SEGMENT_CYLINDER_ITERS):
         t = 0.5 * (lo + hi)
-        _cylinder_gap(r, h, p0[0] + t * d0, p0[1] + t * d1, p0[2] + t * d2, g)
-        dist2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2]
+        g0, g1, g2 = _cylinder_gap(r, h, ax + t * d0, ay + t * d1, az + t * d2)
+        dist2 = g0 * g0 + g1 * g1 + g2 * g2
         if dist2 == 0.0:
             return 0.0
         if dist2 < best:
             best = dist2
-        if g[0] * d0 + g[1] * d1 + g[2] * d2 < 0.0:
+        if g0 * d0 + g1 * d1 + g2 * d2 < 0.0:
             lo = t
         else:
             hi = t
@@ -424,28 +424,25 @@ def _capsule_cylinder(
 ) -> float:
     """Distance between a capsule's or sphere's core (segment ±ha on its z axis; a point for
     ha = 0) and a cylinder's, in the cylinder's frame (``_segment_cylinder``)."""
-    p0 = np.empty(3)
-    p1 = np.empty(3)
-    for i in range(3):
-        c = 0.0
-        a = 0.0
-        for j in range(3):
-            c += Rb[j, i] * (tra[j] - trb[j])
-            a += Rb[j, i] * Ra[j, 2]
-        p0[i] = c - ha * a
-        p1[i] = c + ha * a
-    return _segment_cylinder(pb[0], pb[1], p0, p1)
+    c0 = Rb[0, 0] * (tra[0] - trb[0]) + Rb[1, 0] * (tra[1] - trb[1]) + Rb[2, 0] * (tra[2] - trb[2])
+    c1 = Rb[0, 1] * (tra[0] - trb[0]) + Rb[1, 1] * (tra[1] - trb[1]) + Rb[2, 1] * (tra[2] - trb[2])
+    c2 = Rb[0, 2] * (tra[0] - trb[0]) + Rb[1, 2] * (tra[1] - trb[1]) + Rb[2, 2] * (tra[2] - trb[2])
+    a0 = ha * (Rb[0, 0] * Ra[0, 2] + Rb[1, 0] * Ra[1, 2] + Rb[2, 0] * Ra[2, 2])
+    a1 = ha * (Rb[0, 1] * Ra[0, 2] + Rb[1, 1] * Ra[1, 2] + Rb[2, 1] * Ra[2, 2])
+    a2 = ha * (Rb[0, 2] * Ra[0, 2] + Rb[1, 2] * Ra[1, 2] + Rb[2, 2] * Ra[2, 2])
+    return _segment_cylinder(pb[0], pb[1], c0 - a0, c1 - a1, c2 - a2, c0 + a0, c1 + a1, c2 + a2)
 
 
 @njit(cache=True, inline="always")
 def _point_segment2(
-    px: float, py: float, pz: float, q: np.ndarray, d: np.ndarray, dd: float
-) -> float:
+    px: float, py: float, pz: float, qx: float, qy: float, qz: float,
+    dx: float, dy: float, dz: float, dd: float,
+) -> float:  # fmt: skip
     """Squared distance from a point to the segment q + u d, u in [0, 1] (dd = d·d)."""
     u = 0.0
     if dd > 0.0:
-        u = min(max(((px - q[0]) * d[0] + (py - q[1]) * d[1] + (pz - q[2]) * d[2]) / dd, 0.0), 1.0)
-    x, y, z = px - q[0] - u * d[0], py - q[1] - u * d[1], pz - q[2] - u * d[2]
+        u = min(max(((px - qx) * dx + (py - qy) * dy + (pz - qz) * dz) / dd, 0.0), 1.0)
+    x, y, z = px - qx - u * dx, py - qy - u * dy, pz - qz - u * dz
     return x * x + y * y + z * z
 
 
@@ -454,38 +451,33 @@ def _segment_segment(
     ha: float, Ra: np.ndarray, tra: np.ndarray, hb: float, Rb: np.ndarray, trb: np.ndarray
 ) -> float:
     """Distance between the segments ±ha and ±hb along the z axes of two frames (capsule
-    cores; a point for a half length of 0), closed form. The nearest pair is either interior
-    to both (where the two lines' nearest points fall inside both segments) or has an end of
-    one: the smallest of those five candidates, each an actual pair of points, so the result
-    never falls below the true distance and (near-)parallel segments, whose interior solution
-    is ill-conditioned, are exact through their ends."""
-    p = np.empty(3)
-    q = np.empty(3)
-    d1 = np.empty(3)
-    d2 = np.empty(3)
-    for i in range(3):
-        d1[i] = 2.0 * ha * Ra[i, 2]
-        d2[i] = 2.0 * hb * Rb[i, 2]
-        p[i] = tra[i] - ha * Ra[i, 2]
-        q[i] = trb[i] - hb * Rb[i, 2]
-    a = d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]
-    e = d2[0] * d2[0] + d2[1] * d2[1] + d2[2] * d2[2]
-    best = _point_segment2(p[0], p[1], p[2], q, d2, e)
-    best = min(best, _point_segment2(p[0] + d1[0], p[1] + d1[1], p[2] + d1[2], q, d2, e))
-    best = min(best, _point_segment2(q[0], q[1], q[2], p, d1, a))
-    best = min(best, _point_segment2(q[0] + d2[0], q[1] + d2[1], q[2] + d2[2], p, d1, a))
-    b = d1[0] * d2[0] + d1[1] * d2[1] + d1[2] * d2[2]
+    cores; a point for a half length of 0), closed form, in scalars. The nearest pair is
+    either interior to both (where the two lines' nearest points fall inside both segments)
+    or has an end of one: the smallest of those five candidates, each an actual pair of
+    points, so the result never falls below the true distance and (near-)parallel segments,
+    whose interior solution is ill-conditioned, are exact through their ends."""
+    u0, u1, u2 = 2.0 * ha * Ra[0, 2], 2.0 * ha * Ra[1, 2], 2.0 * ha * Ra[2, 2]  # d1
+    w0, w1, w2 = 2.0 * hb * Rb[0, 2], 2.0 * hb * Rb[1, 2], 2.0 * hb * Rb[2, 2]  # d2
+    p0, p1, p2 = tra[0] - 0.5 * u0, tra[1] - 0.5 * u1, tra[2] - 0.5 * u2
+    q0, q1, q2 = trb[0] - 0.5 * w0, trb[1] - 0.5 * w1, trb[2] - 0.5 * w2
+    a = u0 * u0 + u1 * u1 + u2 * u2
+    e = w0 * w0 + w1 * w1 + w2 * w2
+    best = _point_segment2(p0, p1, p2, q0, q1, q2, w0, w1, w2, e)
+    best = min(best, _point_segment2(p0 + u0, p1 + u1, p2 + u2, q0, q1, q2, w0, w1, w2, e))
+    best = min(best, _point_segment2(q0, q1, q2, p0, p1, p2, u0, u1, u2, a))
+    best = min(best, _point_segment2(q0 + w0, q1 + w1, q2 + w2, p0, p1, p2, u0, u1, u2, a))
+    b = u0 * w0 + u1 * w1 + u2 * w2
     den = a * e - b * b
     if den > 0.0:
-        r0, r1, r2 = p[0] - q[0], p[1] - q[1], p[2] - q[2]
-        c = d1[0] * r0 + d1[1] * r1 + d1[2] * r2
-        f = d2[0] * r0 + d2[1] * r1 + d2[2] * r2
+        r0, r1, r2 = p0 - q0, p1 - q1, p2 - q2
+        c = u0 * r0 + u1 * r1 + u2 * r2
+        f = w0 * r0 + w1 * r1 + w2 * r2
         s = (b * f - c * e) / den
         t = (a * f - b * c) / den
         if 0.0 < s < 1.0 and 0.0 < t < 1.0:
-            x = r0 + s * d1[0] - t * d2[0]
-            y = r1 + s * d1[1] - t * d2[1]
-            z = r2 + s * d1[2] - t * d2[2]
+            x = r0 + s * u0 - t * w0
+            y = r1 + s * u1 - t * w1
+            z = r2 + s * u2 - t * w2
             best = min(best, x * x + y * y + z * z)
     return math.sqrt(best)
 
