@@ -32,6 +32,9 @@ from app.runs.store import ResultStore
 from app.runs.sweep import run_sweep
 from app.sim.hypothesis_sets import cached_hypotheses
 
+#: Quiet time after a design change before its S_GAS is computed (s): a slider's drag sends
+#: its values faster than this, so a drag computes only where it pauses (a newer design
+#: cancels the work anyway).
 DEBOUNCE_S = 0.3
 Z95 = 1.959963984540054
 """The normal quantile of a two-sided 95 % interval."""
@@ -42,6 +45,12 @@ Z95 = 1.959963984540054
 SAMPLE_SEED = 0
 #: Hypotheses of every object computed first, all objects at once, for a first estimate.
 FIRST_SAMPLE = 12
+#: Hypotheses per task after the first sample (the sweep's chunk: fewer, larger tasks than
+#: a progress bar would like, since the panel refreshes from the store on each).
+REST_CHUNK = 60
+#: The panel is redrawn at most this often while the rest is computed (s): each redraw costs
+#: the server an SQL aggregate and the page a layout, on the cores the workers need.
+PANEL_REFRESH_S = 0.25
 
 
 def wilson_interval(successes: float, n: int, z: float = Z95) -> tuple[float, float]:
@@ -449,57 +458,64 @@ class ScoreWorker:
                 snap.first_sample_s = time.perf_counter() - t0
                 snap.state = "computing"
                 self.on_snapshot(snap)
-            for key in self.objects:
+            # the rest of every object in one run (the pool's workers never wait at an
+            # object's last task), in the objects' order: the panel follows the store
+            rest = [k for k in self.objects if not snap.complete(k)]
+            have0 = {k: snap.counts.get(k, (0, 0, 0))[0] for k in rest}
+            sampled = {k: "random sample" if start_have[k] == 0 else "run order" for k in rest}
+            done_keys: set[str] = set()
+            started: dict[str, float] = {}  # object -> when its first task began (about)
+            prev_t = [0.0, -1.0]  # when the last report, and the last redraw, were (s in)
+            t_rest = time.perf_counter()
+
+            def progress(done: int, total: int) -> None:
+                snap.done, snap.total = done, total
                 if cancel.is_set():
                     return
-                if snap.complete(key):
-                    continue
-                snap.running = key
-                have, fc0, c0 = snap.counts.get(key, (0, 0, 0))
-                snap.done, snap.total = 0, snap.n_gh[key] - have
-                sampled = "random sample" if start_have[key] == 0 else "run order"
-                snap.progress[key] = ObjectProgress(
-                    key, snap.n_gh[key], have, fc0, c0, source=sampled
-                )
-                self.on_snapshot(snap)
-                t_obj = time.perf_counter()
-
-                def progress(
-                    done: int,
-                    total: int,
-                    snap: ScoreSnapshot = snap,
-                    key: str = key,
-                    have: int = have,
-                    t_obj: float = t_obj,
-                    sampled: str = sampled,
-                ) -> None:
-                    snap.done, snap.total = done, total
-                    if cancel.is_set():
-                        return
-                    # the judged outcomes so far (one SQL aggregate per reported chunk)
-                    n, fc, c = self.store.summary(design_key(design), settings.key()).get(
-                        object_key(key), (have + done, 0, 0)
-                    )
-                    p = ObjectProgress(
-                        key, snap.n_gh[key], n, fc, c, computed=n - have,
-                        elapsed_s=time.perf_counter() - t_obj, source=sampled,
+                now = time.perf_counter() - t_rest
+                if now - prev_t[1] < PANEL_REFRESH_S and done < total:
+                    return  # the panel (and the browser) need not redraw for every task
+                prev_t[1] = now
+                # the judged outcomes so far (one SQL aggregate per reported task)
+                summary = self.store.summary(design_key(design), settings.key())
+                elapsed = time.perf_counter() - t_rest
+                for k in rest:
+                    n, fc, c = summary.get(object_key(k), (have0[k], 0, 0))
+                    snap.counts[k] = (n, fc, c)
+                    if n >= snap.n_gh[k]:
+                        snap.progress.pop(k, None)
+                        if k not in done_keys:
+                            done_keys.add(k)
+                            self.on_object_done(k)
+                        continue
+                    if n > have0[k]:  # the object's own rate: from its first reported task
+                        started.setdefault(k, prev_t[0])
+                    snap.progress[k] = ObjectProgress(
+                        k, snap.n_gh[k], n, fc, c, computed=n - have0[k],
+                        elapsed_s=elapsed - started.get(k, elapsed), source=sampled[k],
                     )  # fmt: skip
-                    snap.progress[key] = p
-                    snap.rate_per_s = p.rate_per_s or snap.rate_per_s
-                    snap.counts[key] = (n, fc, c)
-                    self.on_snapshot(snap)
+                prev_t[0] = elapsed
+                snap.running = next((k for k in rest if k not in done_keys), None)
+                if elapsed > 0 and done:
+                    snap.rate_per_s = done / elapsed
+                self.on_snapshot(snap)
 
+            if rest:
+                snap.running = rest[0]
+                self.on_snapshot(snap)
                 res = run_sweep(
-                    [design], [key], settings=settings, store=self.store,
-                    executor=self.executor, chunk=30, progress=progress, cancel=cancel,
+                    [design], rest, settings=settings, store=self.store,
+                    executor=self.executor, chunk=REST_CHUNK, progress=progress, cancel=cancel,
                     shuffle_seed=SAMPLE_SEED,
                 )  # fmt: skip
                 if res is None or cancel.is_set():
                     return
                 fresh = read_snapshot(self.store, design, self.objects, settings, self.ref_dir)
-                snap.counts[key] = fresh.counts[key]
-                snap.progress.pop(key, None)
-                self.on_object_done(key)
+                for k in rest:
+                    snap.counts[k] = fresh.counts[k]
+                    snap.progress.pop(k, None)
+                    if k not in done_keys:
+                        self.on_object_done(k)
             snap.running = None
             snap.state = "complete"
             snap.seconds = time.perf_counter() - t0

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import viser
 
+from app.explorer.live_score import DEBOUNCE_S
 from app.explorer.session import ExplorerContext, Session, warm_up
 from app.model.objects import OBJECT_KEYS, load_object
 from app.runs.executors import Executor, InlineExecutor, LocalExecutor
@@ -191,7 +192,7 @@ class ExplorerServer:
         objects: Sequence[str] | None = None,
         workers: int | None = None,
         shots_dir: str | Path | None = None,
-        debounce_s: float = 0.3,
+        debounce_s: float = DEBOUNCE_S,
         reference_dir: str | Path | None = None,
         preload: bool = True,
         log: Callable[[str], None] | None = None,

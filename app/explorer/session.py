@@ -17,7 +17,7 @@ import viser
 from app.errors import HandbenchError
 from app.explorer import url_state
 from app.explorer.input_commit import commit_script_html
-from app.explorer.live_score import ScoreWorker, read_snapshot
+from app.explorer.live_score import DEBOUNCE_S, ScoreWorker, read_snapshot
 from app.explorer.map_data import TOTAL, map_points
 from app.explorer.page_toasts import toast_script_html
 from app.explorer.panel_design import DesignPanel
@@ -71,7 +71,7 @@ class ExplorerContext:
     server: viser.ViserServer
     """The viser server (share URL)."""
     default_object: str = "chips_can"
-    debounce_s: float = 0.3
+    debounce_s: float = DEBOUNCE_S
     reference_dir: Path | None = None
     """Shipped reference sweep (table.csv + meta.json); None: docs/results."""
 
@@ -493,7 +493,11 @@ class Session:
     def _object_scored(self, key: str) -> None:
         if key == self.object_key:
             self._refresh_outcomes()
-        self.map_panel.refresh()
+        # the map shows complete designs only: redrawn once the design's last object is in
+        # (each redraw costs the server a render and the page an image, beside the workers)
+        snap = read_snapshot(self.ctx.store, self.design, self.ctx.objects, self.settings)
+        if all(snap.complete(k) for k in self.ctx.objects):
+            self.map_panel.refresh()
 
     def _keys(self) -> tuple[str, str, str]:
         return design_key(self.design), object_key(self.object_key), self.settings.key()

@@ -152,6 +152,11 @@ class InlineExecutor(Executor):
             yield t, run_task(t)
 
 
+#: How often a run waiting for its tasks looks at its cancel flag (the explorer's next design
+#: waits this long at most, plus the tasks already running).
+CANCEL_POLL_S = 0.05
+
+
 class LocalExecutor(Executor):
     """A pool of local processes (spawned: safe beside threads such as the web server).
 
@@ -198,7 +203,7 @@ class LocalExecutor(Executor):
                 t = queue.pop()
                 pending[pool.submit(self.worker_fn, t, self._markers)] = t
             procs.update(getattr(pool, "_processes", None) or {})
-            done, _ = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+            done, _ = wait(pending, timeout=CANCEL_POLL_S, return_when=FIRST_COMPLETED)
             if cancel is not None and cancel.is_set():
                 for f in pending:
                     f.cancel()

@@ -513,8 +513,13 @@ class ResultStore:
         """
         self._writable()
         rows = [
-            (design_key, object_key, settings_key, str(gh),
-             *(o.row if isinstance(o, EncodedOutcome) else _encode(o)))
+            (
+                design_key,
+                object_key,
+                settings_key,
+                str(gh),
+                *(o.row if isinstance(o, EncodedOutcome) else _encode(o)),
+            )
             for gh, o in outcomes.items()
         ]
         with self.transaction(), self._guard() as db:
