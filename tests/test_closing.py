@@ -445,7 +445,7 @@ def test_mesh_distance_equals_brute_force(tmp_path, monkeypatch) -> None:
     try:
         pk = obj.mesh_pack()
         V, F = np.asarray(obj.mesh.vertices), np.asarray(obj.mesh.faces)
-        surf, fi = obj.mesh.sample(60, return_index=True)
+        surf, fi = obj.mesh.sample(60, return_index=True)  # type: ignore[misc]
         normals = obj.mesh.face_normals[fi]
         rng = np.random.default_rng(12)
         eye, zero = np.eye(3), np.zeros(3)

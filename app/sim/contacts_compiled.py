@@ -219,7 +219,7 @@ def _mesh_select(T: np.ndarray, samp: np.ndarray, s0: int, s1: int, cidx: np.nda
     return n_sel
 
 
-@overload(mesh_select, jit_options={"cache": True})
+@overload(mesh_select, jit_options={"cache": True})  # type: ignore[arg-type]
 def _mesh_select_impl(T, samp, s0, s1, cidx, c0, c1, assign, sdist, lip, tol, src, sel):  # noqa: ANN001, ANN202, E501
     if _is_mesh_pack(src):
         return lambda T, samp, s0, s1, cidx, c0, c1, assign, sdist, lip, tol, src, sel: (
@@ -228,14 +228,14 @@ def _mesh_select_impl(T, samp, s0, s1, cidx, c0, c1, assign, sdist, lip, tol, sr
     return lambda T, samp, s0, s1, cidx, c0, c1, assign, sdist, lip, tol, src, sel: 0
 
 
-@overload(object_sd, inline="always", jit_options={"cache": True})
+@overload(object_sd, inline="always", jit_options={"cache": True})  # type: ignore[arg-type]
 def _object_sd_impl(px, py, pz, src):  # noqa: ANN001, ANN202 (numba types)
     if _is_mesh_pack(src):
         return lambda px, py, pz, src: point_sdf(src, px, py, pz)
     return lambda px, py, pz, src: sdf_point(px, py, pz, src)
 
 
-@overload(object_mesh_distance, jit_options={"cache": True})
+@overload(object_mesh_distance, jit_options={"cache": True})  # type: ignore[arg-type]
 def _object_mesh_distance_impl(typ, prm, R, t, src, exact_above):  # noqa: ANN001, ANN202
     if _is_mesh_pack(src):
         return lambda typ, prm, R, t, src, exact_above: mesh_distance(
