@@ -498,8 +498,9 @@ def shape_distance(
     vb0: int,
     vb1: int,
 ) -> float:
-    """Distance between shapes a and b, mm (cores' distance minus the margins). A capsule or
-    sphere against a cylinder takes the direct route (``_segment_cylinder``), the rest GJK."""
+    """Distance between shapes a and b, mm (cores' distance minus the margins): capsules and
+    spheres against a cylinder or each other in closed form, the rest by GJK scanning every
+    vertex (``shape_distance_nbr``)."""
     return shape_distance_nbr(ta, pa, Ra, tra, tb, pb, Rb, trb, verts, NO_NEIGHBOURS,
                               NO_NEIGHBOURS, va0, va1, vb0, vb1)  # fmt: skip
 
