@@ -62,3 +62,25 @@ def test_first_sample_is_the_prefix_of_the_seeded_order(tmp_path: Path) -> None:
     for t in first:
         order = [i for u in full if u.object_name == t.object_name for i in u.gh]
         assert list(t.gh) == order[:24]
+
+
+def test_many_designs_are_batched_by_cmc_angle(tmp_path: Path) -> None:
+    """The 5° map's 190 designs: tasks of at most MAX_DESIGNS_PER_TASK designs (a worker's kit
+    cache holds them), every (design, hypothesis) once, a CMC angle's designs together where
+    they fit."""
+    from app.runs.tasks import MAX_DESIGNS_PER_TASK, design_batches
+
+    designs = [ThumbDesign(float(c), float(m)) for c in range(0, 50, 5) for m in range(0, 95, 5)]
+    batches = design_batches(designs)
+    key = lambda d: (d.cmc_deg, d.mcp_deg)  # noqa: E731
+    assert sorted(map(key, (d for b in batches for d in b))) == sorted(map(key, designs))
+    assert all(len(b) <= MAX_DESIGNS_PER_TASK for b in batches)
+    by_cmc = {c: {i for i, b in enumerate(batches) for d in b if d.cmc_deg == c} for c in
+              {d.cmc_deg for d in designs}}  # fmt: skip
+    assert all(len(v) == 1 for v in by_cmc.values())  # 19 designs per angle: never split
+    big = [ThumbDesign(10.0, float(m)) for m in range(91)]  # one angle, more than fits
+    assert [len(b) for b in design_batches(big)] == [48, 43]
+    with ResultStore(tmp_path / "s.sqlite") as store:
+        tasks = plan_tasks(store, designs, ["washer"], SimSettings(), chunk=100)
+    pairs = [(d, i) for t in tasks for d in t.designs for i in t.gh]
+    assert len(pairs) == len(set(pairs)) == len(designs) * len(cached_hypotheses("washer"))

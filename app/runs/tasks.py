@@ -141,5 +141,31 @@ def plan_tasks(
                 if missing:
                     groups.setdefault(missing, []).append(d)
             for missing, ds in groups.items():
-                tasks.append(Task(name, missing, tuple(ds), settings, hypothesis_set))
+                for batch in design_batches(ds):
+                    tasks.append(Task(name, missing, batch, settings, hypothesis_set))
     return tasks
+
+
+#: Designs per task at most: a worker keeps the kits of its recent designs (``cached_kit``,
+#: 128), and a task listing more designs than that would rebuild every kit on every task
+#: (the 5° map's 190 designs took 9 min instead of 5).
+MAX_DESIGNS_PER_TASK = 48
+
+
+def design_batches(
+    designs: Sequence[ThumbDesign], limit: int = MAX_DESIGNS_PER_TASK
+) -> list[tuple[ThumbDesign, ...]]:
+    """``designs`` in batches of at most ``limit``, each CMC angle's designs together where
+    they fit (they share a hypothesis' base stage), in the order given otherwise."""
+    groups: dict[tuple[float, str], list[ThumbDesign]] = {}
+    for d in designs:
+        groups.setdefault((d.cmc_deg, d.cmc_tilt), []).append(d)
+    batches: list[list[ThumbDesign]] = []
+    for g in groups.values():
+        for i in range(0, len(g), limit):
+            part = g[i : i + limit]
+            if batches and len(batches[-1]) + len(part) <= limit:
+                batches[-1].extend(part)
+            else:
+                batches.append(list(part))
+    return [tuple(b) for b in batches]
