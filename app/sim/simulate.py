@@ -538,7 +538,7 @@ def simulate_thumb(
     )
 
 
-@lru_cache(maxsize=128)
+@lru_cache(maxsize=256)
 def cached_kit(cmc_deg: float, mcp_deg: float, tilt: str) -> HandKit:
     """The simulation kit of a design (per process; the hand file is the default one)."""
     return HandKit(Hand(ThumbDesign(cmc_deg, mcp_deg, tilt), load_hand_dims()))  # type: ignore[arg-type]
