@@ -24,6 +24,12 @@ NUMBA_SOURCES = (
 )
 
 
+def cache_root() -> Path:
+    """Where handbench caches what it computes once: ``$XDG_CACHE_HOME/handbench``
+    (``~/.cache/handbench``)."""
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "handbench"
+
+
 def numba_cache_dir() -> Path:
     """numba's on-disk cache of this source: ``~/.cache/handbench/numba/<hash of the kernels'
     files>``. numba invalidates a cached kernel only when its own file changes, not when a
@@ -35,8 +41,7 @@ def numba_cache_dir() -> Path:
         p = root / rel
         h.update(rel.encode())
         h.update(p.read_bytes() if p.is_file() else b"")
-    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    return base / "handbench" / "numba" / h.hexdigest()[:16]
+    return cache_root() / "numba" / h.hexdigest()[:16]
 
 
 # before numba is imported anywhere: a user's own NUMBA_CACHE_DIR is respected

@@ -9,11 +9,11 @@ at once, numbers possibly still computing). Chromium's throw-away profile lives 
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from pathlib import Path
 
+from app import cache_root
 from app.errors import HandbenchError, SettingsError
 from app.explorer.browser import browser_context, hide_toasts, wait_drawn
 from app.explorer.server import ExplorerServer, workers_from_env
@@ -34,8 +34,7 @@ def parse_size(text: str) -> tuple[int, int]:
 
 def profile_root() -> Path:
     """Where chromium's throw-away profiles go: ``$XDG_CACHE_HOME/handbench/chromium``."""
-    cache = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(cache) / "handbench" / "chromium"
+    return cache_root() / "chromium"
 
 
 def take_screenshot(

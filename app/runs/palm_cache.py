@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from app import cache_root
 from app.hashing import stable_hash
 from app.model.contact_set import LINK_NAMES, ContactSet
 from app.model.hand.data import load_hand_dims
@@ -51,8 +52,7 @@ _LINK_CODE = {n: k for k, n in enumerate(LINK_NAMES)}
 
 def cache_dir() -> Path:
     """Where palm tables are cached: ``$XDG_CACHE_HOME/handbench/palms``."""
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "handbench" / "palms"
+    return cache_root() / "palms"
 
 
 @lru_cache(maxsize=1)

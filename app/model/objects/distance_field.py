@@ -55,6 +55,8 @@ import numpy as np
 import trimesh
 from numba import njit
 
+from app import cache_root
+
 #: The arrays of ``DistanceField.pack`` (a tuple, so that compiled code takes it whole).
 MeshPack = tuple[Any, ...]
 
@@ -670,8 +672,7 @@ def build_field(
 
 def cache_dir() -> Path:
     """Where fields are cached: ``$XDG_CACHE_HOME/handbench/fields`` (``~/.cache/...``)."""
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "handbench" / "fields"
+    return cache_root() / "fields"
 
 
 def field_key(mesh: trimesh.Trimesh, spacing_mm: float, band_mm: float) -> str:

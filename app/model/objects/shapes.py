@@ -30,6 +30,8 @@ import trimesh
 from scipy.interpolate import PchipInterpolator
 from scipy.spatial import ConvexHull
 
+from app import cache_root
+
 SdfFn = Callable[[np.ndarray], np.ndarray]
 
 #: Largest distance (mm) between a mesh face and the ideal surface (circle sagitta).
@@ -239,8 +241,7 @@ class PolygonSdfTable:
         h.update(np.ascontiguousarray(self.verts, np.float64).tobytes())
         h.update(np.ascontiguousarray(self.real, np.bool_).tobytes())
         h.update(f"{self.h!r}|{self.pad!r}|{TABLE_VERSION}".encode())
-        base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-        return Path(base) / "handbench" / "tables" / f"{h.hexdigest()[:32]}.npy"
+        return cache_root() / "tables" / f"{h.hexdigest()[:32]}.npy"
 
     def __call__(self, q: np.ndarray) -> np.ndarray:
         g = self.grid()
