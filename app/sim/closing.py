@@ -314,13 +314,10 @@ def _advance(
         q,
         v,
         obstacles.arrays,
-        obstacles.n_object,
-        obstacles.mask,
-        obstacles.spheres,
+        obstacles.kernel_args(),
         settings.stop_tol_mm,
         settings.max_steps,
         counters,
-        obstacles.kernel_args(),
     )
     stats.queries += int(counters[0])
     stats.steps += int(counters[1])

@@ -644,24 +644,15 @@ def advance_stage_compiled(
     q: np.ndarray,
     v: np.ndarray,
     arrays: ObstacleArrays,
-    n_object: int,
-    mask: np.ndarray | None,
-    spheres: np.ndarray | None,
+    kernel_args: tuple[np.ndarray, np.ndarray, np.ndarray],
     tol: float,
     max_steps: int,
     counters: np.ndarray,
-    kernel_args: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, str, tuple[int, ...], tuple[int, ...]]:
     """``advance_stage`` on the compiled engine: (q, event kind, links, joints).
-    ``kernel_args``: (is_object, mask, spheres) already in the kernel's layout
-    (``Obstacles.kernel_args``), else made from the arguments before."""
-    if kernel_args is not None:
-        is_obj, m, sph = kernel_args
-    else:
-        P = len(arrays)
-        is_obj = np.arange(P) < n_object
-        m = np.ones((3, P), np.bool_) if mask is None else np.ascontiguousarray(mask, np.bool_)
-        sph = np.full((P, 4), np.inf) if spheres is None else np.ascontiguousarray(spheres, float)
+    ``kernel_args``: (is_object (P,), mask (3, P), spheres (P, 4)) of the obstacles in the
+    kernel's layout (``Obstacles.kernel_args``, made once per obstacle set)."""
+    is_obj, m, sph = kernel_args
     qn, code, links, joints = advance_stage_kernel(
         *chain_arrays(chain),
         np.ascontiguousarray(T_object_palm, float),
