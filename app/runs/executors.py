@@ -107,11 +107,13 @@ def prepare_thumb_obstacles(object_name: str, settings: SimSettings) -> int:
     if not table.complete:
         return 0
     obj, kit = load_object(object_name), base_kit(ThumbDesign())
+    made = 0
     for i in range(len(table)):
         palm = table.get(i)
-        if not math.isnan(palm.s_mm):
+        if not math.isnan(palm.s_mm):  # a palm stage that touched: the thumb closes on it
             palm_thumb_obstacles(kit, obj, palm, settings.closing)
-    return len(table)
+            made += 1
+    return made
 
 
 def _started() -> int:

@@ -122,8 +122,9 @@ def plan_tasks(
     skey = settings.key()
     dkeys = [design_key(d) for d in designs]
     tasks: list[Task] = []
-    obj_tasks: list[Task] = []
+    first = {d: k for k, d in enumerate(designs)}  # a batch's place: its first design's
     for name in object_names:
+        obj_tasks: list[Task] = []
         hyps = hypotheses_of(name, hypothesis_set)
         okey = set_object_key(name, hypothesis_set)
         present = [store.present_ids(dk, okey, skey) for dk in dkeys]
@@ -146,10 +147,8 @@ def plan_tasks(
                     obj_tasks.append(Task(name, missing, batch, settings, hypothesis_set))
         # batch after batch (each chunk in its order): a worker's consecutive tasks share
         # their designs' kits, however many designs the run has
-        first = {d: k for k, d in enumerate(designs)}
         obj_tasks.sort(key=lambda t: first[t.designs[0]])
         tasks.extend(obj_tasks)
-        obj_tasks.clear()
     return tasks
 
 
