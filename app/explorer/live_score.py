@@ -465,20 +465,19 @@ class ScoreWorker:
             sampled = {k: "random sample" if start_have[k] == 0 else "run order" for k in rest}
             done_keys: set[str] = set()
             started: dict[str, float] = {}  # object -> when its first task began (about)
-            prev_t = [0.0, -1.0]  # when the last report, and the last redraw, were (s in)
+            last_redraw = -PANEL_REFRESH_S  # s into this run
             t_rest = time.perf_counter()
 
             def progress(done: int, total: int) -> None:
+                nonlocal last_redraw
                 snap.done, snap.total = done, total
                 if cancel.is_set():
                     return
-                now = time.perf_counter() - t_rest
-                if now - prev_t[1] < PANEL_REFRESH_S and done < total:
-                    return  # the panel (and the browser) need not redraw for every task
-                prev_t[1] = now
-                # the judged outcomes so far (one SQL aggregate per reported task)
-                summary = self.store.summary(design_key(design), settings.key())
                 elapsed = time.perf_counter() - t_rest
+                if elapsed - last_redraw < PANEL_REFRESH_S and done < total:
+                    return  # the panel (and the browser) need not redraw for every task
+                # the judged outcomes so far (one SQL aggregate per redraw)
+                summary = self.store.summary(design_key(design), settings.key())
                 for k in rest:
                     n, fc, c = summary.get(object_key(k), (have0[k], 0, 0))
                     snap.counts[k] = (n, fc, c)
@@ -488,13 +487,13 @@ class ScoreWorker:
                             done_keys.add(k)
                             self.on_object_done(k)
                         continue
-                    if n > have0[k]:  # the object's own rate: from its first reported task
-                        started.setdefault(k, prev_t[0])
+                    if n > have0[k]:  # the object's own rate: from the redraw before its first
+                        started.setdefault(k, max(last_redraw, 0.0))
                     snap.progress[k] = ObjectProgress(
                         k, snap.n_gh[k], n, fc, c, computed=n - have0[k],
                         elapsed_s=elapsed - started.get(k, elapsed), source=sampled[k],
                     )  # fmt: skip
-                prev_t[0] = elapsed
+                last_redraw = elapsed
                 snap.running = next((k for k in rest if k not in done_keys), None)
                 if elapsed > 0 and done:
                     snap.rate_per_s = done / elapsed
