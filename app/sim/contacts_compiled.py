@@ -141,6 +141,19 @@ def link_tables(shapes: tuple[Shape, ...], spacing: float) -> LinkTables:
     )  # fmt: skip
 
 
+@njit(cache=True, inline="always")
+def _posed_sample(
+    T: np.ndarray, samp: np.ndarray, k: int | np.integer
+) -> tuple[float, float, float]:
+    """Link sample ``k`` (``samp`` rows, link frame) in the object frame (``T`` = T_object_link
+    (4, 4))."""
+    return (
+        T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2] + T[0, 3],
+        T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2] + T[1, 3],
+        T[2, 0] * samp[k, 0] + T[2, 1] * samp[k, 1] + T[2, 2] * samp[k, 2] + T[2, 3],
+    )
+
+
 @njit(cache=True)
 def _argmax_tie(d: np.ndarray, n: int, tie: float) -> int:
     """First index of ``d[:n]`` within ``tie`` of its maximum (``contacts._argmax_tie``)."""
@@ -199,17 +212,13 @@ def _mesh_select(T: np.ndarray, samp: np.ndarray, s0: int, s1: int, cidx: np.nda
     lo_c = np.empty(c1 - c0)
     for c in range(c0, c1):
         k = s0 + cidx[c]
-        x = T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2] + T[0, 3]
-        y = T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2] + T[1, 3]
-        z = T[2, 0] * samp[k, 0] + T[2, 1] * samp[k, 1] + T[2, 2] * samp[k, 2] + T[2, 3]
+        x, y, z = _posed_sample(T, samp, k)
         lo_c[c - c0] = signed_bounds(pk, x, y, z)[0]
     n_sel = 0
     for k in range(s0, s1):
         if lo_c[assign[k]] - lip * sdist[k] > tol:
             continue
-        x = T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2] + T[0, 3]
-        y = T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2] + T[1, 3]
-        z = T[2, 0] * samp[k, 0] + T[2, 1] * samp[k, 1] + T[2, 2] * samp[k, 2] + T[2, 3]
+        x, y, z = _posed_sample(T, samp, k)
         lo, hi = signed_bounds(pk, x, y, z)
         if lo > tol:
             continue
@@ -348,10 +357,8 @@ def contacts_kernel(
                             sd_c[c - c0] = lb
                             continue
                     k = s0 + cidx[c]
-                    x = T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2]
-                    y = T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2]
-                    z = T[2, 0] * samp[k, 0] + T[2, 1] * samp[k, 1] + T[2, 2] * samp[k, 2]
-                    sd_c[c - c0] = object_sd(x + T[0, 3], y + T[1, 3], z + T[2, 3], prog)
+                    x, y, z = _posed_sample(T, samp, k)
+                    sd_c[c - c0] = object_sd(x, y, z, prog)
                     exact[c - c0] = True
                 if sweep == 1:
                     m_min = np.inf
@@ -369,9 +376,7 @@ def contacts_kernel(
             for k in range(s0, s1):
                 if sd_c[assign[k]] - lip * sdist[k] > bound:
                     continue
-                x = T[0, 0] * samp[k, 0] + T[0, 1] * samp[k, 1] + T[0, 2] * samp[k, 2] + T[0, 3]
-                y = T[1, 0] * samp[k, 0] + T[1, 1] * samp[k, 1] + T[1, 2] * samp[k, 2] + T[1, 3]
-                z = T[2, 0] * samp[k, 0] + T[2, 1] * samp[k, 1] + T[2, 2] * samp[k, 2] + T[2, 3]
+                x, y, z = _posed_sample(T, samp, k)
                 v = object_sd(x, y, z, prog)
                 if v <= tol:
                     sel[n_sel] = k
@@ -414,9 +419,7 @@ def contacts_kernel(
                         d[i] = e
         for k in chosen:
             q = np.empty(3)
-            for r in range(3):
-                q[r] = T[r, 0] * samp[k, 0] + T[r, 1] * samp[k, 1] + T[r, 2] * samp[k, 2]
-                q[r] += T[r, 3]
+            q[0], q[1], q[2] = _posed_sample(T, samp, k)
             g = np.empty(3)
             for r in range(3):
                 q[r] += h
