@@ -91,6 +91,8 @@ def test_kill_minus_nine_then_resume_gives_the_same_table(tmp_path: Path) -> Non
         str(tmp_path / "killed"),
         "--store",
         str(store),
+        "--chunk",  # one hypothesis a task: stored a few at a time, so a poll sees it mid-way
+        "1",
     ]
     proc = subprocess.Popen(
         cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True
@@ -99,7 +101,7 @@ def test_kill_minus_nine_then_resume_gives_the_same_table(tmp_path: Path) -> Non
     # wait until some, but not all, outcomes are stored, then kill the whole process group
     stored = 0
     while time.time() < deadline:
-        time.sleep(0.2)
+        time.sleep(0.02)  # the whole sweep takes well under a second once the workers run
         if store.exists():
             try:
                 with ResultStore(store, readonly=True) as st:
