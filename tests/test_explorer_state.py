@@ -28,6 +28,28 @@ def test_link_bad_number() -> None:
 def test_probe_writes_under_viser_prefix() -> None:
     html = probe_html("k1")
     assert "viser-user:k1" in html and "location.search" in html
+    assert "viser-user:k1-webgl" in html and "UNMASKED_RENDERER_WEBGL" in html
+    assert '"' not in html.split('onerror="', 1)[1].rstrip('">')  # the attribute stays whole
+
+
+def test_software_renderers_are_told_from_gpus() -> None:
+    from app.explorer.url_state import is_software_renderer
+
+    software = [
+        "ANGLE (Google, Vulkan 1.3.0 (SwiftShader Device (Subzero) (0x0000C0DE)), "
+        "SwiftShader driver)",
+        "llvmpipe (LLVM 15.0.6, 256 bits)",
+        "Microsoft Basic Render Driver",
+        "Software Rasterizer",
+    ]
+    gpus = [
+        "ANGLE (NVIDIA, NVIDIA GeForce RTX 3060 (0x00002503) Direct3D11 vs_5_0 ps_5_0, D3D11)",
+        "Apple M2",
+        "Mesa Intel(R) UHD Graphics 620 (KBL GT2)",
+        "AMD Radeon Pro 5500M OpenGL Engine",
+    ]
+    assert all(is_software_renderer(r) for r in software)
+    assert not any(is_software_renderer(r) for r in gpus)
 
 
 def test_map_image_and_table() -> None:

@@ -21,6 +21,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from app.explorer.latency_log import mark
 from app.explorer.reference import REFERENCE_DIFF_NOTE, REFERENCE_NOTE, reference_score
 from app.model.design import ThumbDesign
 from app.model.objects import load_object
@@ -32,9 +33,10 @@ from app.runs.store import ResultStore
 from app.runs.sweep import run_sweep
 from app.sim.hypothesis_sets import cached_hypotheses
 
-#: Quiet time after a design change before its S_GAS is computed (s): a slider's drag sends
-#: its values faster than this, so a drag computes only where it pauses (a newer design
-#: cancels the work anyway).
+#: Quiet time before a design's S_GAS is computed (s). A design that follows this much quiet
+#: (a typed value, a click, one arrow key) starts at once; one that follows another design
+#: sooner (a slider's drag sends its values faster than this) waits until this much quiet has
+#: passed, so a drag computes only where it pauses (a newer design cancels the work anyway).
 DEBOUNCE_S = 0.3
 Z95 = 1.959963984540054
 """The normal quantile of a two-sided 95 % interval."""
@@ -47,7 +49,7 @@ SAMPLE_SEED = 0
 FIRST_SAMPLE = 12
 #: Hypotheses per task after the first sample (the sweep's chunk: fewer, larger tasks than
 #: a progress bar would like, since the panel refreshes from the store on each).
-REST_CHUNK = 60
+REST_CHUNK = 30
 #: The panel is redrawn at most this often while the rest is computed (s): each redraw costs
 #: the server an SQL aggregate and the page a layout, on the cores the workers need.
 PANEL_REFRESH_S = 0.25
@@ -340,6 +342,32 @@ def reference_markdown(ref: DesignScore) -> str:
     return "\n".join(rows)
 
 
+class FirstEstimate:
+    """Whether and when a requested design's first estimate is shown (``ScoreWorker.request``)."""
+
+    def __init__(self, coming: bool) -> None:
+        """``coming``: the estimate is computed at once (else ``wait`` returns at once)."""
+        self.shown = False
+        """The estimate was shown."""
+        self._done = threading.Event()
+        if not coming:
+            self._done.set()
+
+    def set_shown(self) -> None:
+        self.shown = True
+        self._done.set()
+
+    def give_up(self) -> None:
+        """No estimate will come (cancelled, replaced, failed, or one object left)."""
+        self._done.set()
+
+    def wait(self, timeout: float) -> bool:
+        """Wait at most ``timeout`` s for the estimate, or for word that none is coming;
+        whether it was shown."""
+        self._done.wait(max(0.0, timeout))
+        return self.shown
+
+
 class ScoreWorker:
     """One background thread per tab; ``request`` replaces (and cancels) any older design."""
 
@@ -363,7 +391,11 @@ class ScoreWorker:
         self._lock = threading.Lock()
         self._wake = threading.Event()
         self._cancel = threading.Event()
-        self._pending: tuple[ThumbDesign, SimSettings, float] | None = None
+        self._pending: tuple[ThumbDesign, SimSettings, float, FirstEstimate] | None = None
+        self._first = FirstEstimate(coming=False)
+        """The latest request's first estimate."""
+        self._last_request = time.monotonic()
+        """When the latest design was requested (the worker's start before the first)."""
         self._closed = False
         self.idle = threading.Event()
         self.idle.set()
@@ -371,26 +403,38 @@ class ScoreWorker:
         self._thread = threading.Thread(target=self._loop, name="sgas-worker", daemon=True)
         self._thread.start()
 
-    def request(self, design: ThumbDesign, settings: SimSettings) -> None:
-        """Show the stored scores of ``design`` now; compute the rest after the debounce."""
+    def request(self, design: ThumbDesign, settings: SimSettings) -> FirstEstimate:
+        """Show the stored scores of ``design`` now; compute the rest at once if nothing was
+        requested for ``debounce_s``, else once ``debounce_s`` has passed without a newer
+        request. Returns the handle of its first estimate (coming only if computed at once)."""
+        now = time.monotonic()
         snap = read_snapshot(self.store, design, self.objects, settings, self.ref_dir)
         missing = any(not snap.complete(k) for k in self.objects)
         snap.state = "waiting" if missing else "complete"
         self.on_snapshot(snap)
+        mark("header_shown", snap.state)
         with self._lock:
+            quiet = now - self._last_request >= self.debounce_s
+            self._last_request = now
             self._cancel.set()  # a stale computation stops at its next task
+            self._first.give_up()  # the replaced request's estimate will not come
+            first = self._first = FirstEstimate(coming=missing and quiet)
             self._pending = (
-                (design, settings, time.monotonic() + self.debounce_s) if missing else None
+                (design, settings, now if quiet else now + self.debounce_s, first)
+                if missing
+                else None
             )
             if missing:
                 self.idle.clear()
             self._wake.set()
+        return first
 
     def close(self) -> None:
         """Cancel any work and stop the thread (a closed tab)."""
         with self._lock:
             self._closed = True
             self._cancel.set()
+            self._first.give_up()
             self._pending = None
             self._wake.set()
         self._thread.join(timeout=5.0)
@@ -421,9 +465,19 @@ class ScoreWorker:
             if delay > 0:
                 time.sleep(min(delay, 0.05))
                 continue
-            self._compute(job[0], job[1], cancel)
+            try:
+                self._compute(job[0], job[1], cancel, job[3])
+            finally:
+                job[3].give_up()
 
-    def _compute(self, design: ThumbDesign, settings: SimSettings, cancel: threading.Event) -> None:
+    def _compute(
+        self,
+        design: ThumbDesign,
+        settings: SimSettings,
+        cancel: threading.Event,
+        first: FirstEstimate,
+    ) -> None:
+        mark("compute", f"{design.cmc_deg} {design.mcp_deg}")
         t0 = time.perf_counter()
         snap = read_snapshot(self.store, design, self.objects, settings, self.ref_dir)
         snap.state = "computing"
@@ -439,6 +493,7 @@ class ScoreWorker:
                 snap.state = "computing a first sample of every object"
                 self.on_snapshot(snap)
                 t_first = time.perf_counter()
+                mark("first_start")
                 res = run_sweep(
                     [design], todo, settings=settings, store=self.store, executor=self.executor,
                     chunk=FIRST_SAMPLE, progress=False, cancel=cancel, shuffle_seed=SAMPLE_SEED,
@@ -457,7 +512,10 @@ class ScoreWorker:
                     )  # fmt: skip
                 snap.first_sample_s = time.perf_counter() - t0
                 snap.state = "computing"
+                mark("first_done")
                 self.on_snapshot(snap)
+                first.set_shown()
+                mark("first_shown")
             # the rest of every object in one run (the pool's workers never wait at an
             # object's last task), in the objects' order: the panel follows the store
             rest = [k for k in self.objects if not snap.complete(k)]
@@ -499,6 +557,7 @@ class ScoreWorker:
                     snap.rate_per_s = done / elapsed
                 self.on_snapshot(snap)
 
+            first.give_up()  # one object left: its estimate comes with the run's progress
             if rest:
                 snap.running = rest[0]
                 self.on_snapshot(snap)

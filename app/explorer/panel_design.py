@@ -9,6 +9,7 @@ import viser
 
 from app.config_docs import field_docs
 from app.errors import DesignError
+from app.explorer.latency_log import mark
 from app.model.design import BASELINE, CMC_RANGE_DEG, MCP_RANGE_DEG, ThumbDesign, published_designs
 
 CUSTOM = "(custom)"
@@ -112,6 +113,7 @@ class DesignPanel:
     def _changed(self) -> None:
         if self._muted:
             return
+        mark("slider", f"{self.cmc.value} {self.mcp.value}")
         try:
             d = checked_design(self.cmc.value, self.mcp.value)
         except DesignError as e:

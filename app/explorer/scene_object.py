@@ -25,6 +25,9 @@ CONTACT_RADIUS_MM = 4.0
 """Contact markers: spheres this big (a fingertip pad is ~10 mm wide) ..."""
 OUTLINE_SCALE = 1.45
 """... with a dark outline (the back faces of a sphere this much larger)."""
+CONTACT_SPHERE_SUBDIVISIONS = 1
+"""A contact marker is an 80-triangle icosphere (and its outline another): a grasp has up to
+~100 contacts, and at 320 triangles the markers took a quarter of a software-WebGL frame."""
 OUTLINE_COLOR = (25, 25, 25)
 OBJECT_OPACITY_WITH_CONTACTS = 0.5
 """The object turns translucent while contacts are shown, so none hides behind it."""
@@ -56,7 +59,9 @@ class ObjectView:
         """Contact classes ('palmar', 'non_palmar', 'palm') shown now."""
         self._mesh: tuple[np.ndarray, np.ndarray] | None = None
         self._translucent = False
-        sphere = trimesh.creation.icosphere(subdivisions=2, radius=CONTACT_RADIUS_MM)
+        sphere = trimesh.creation.icosphere(
+            subdivisions=CONTACT_SPHERE_SUBDIVISIONS, radius=CONTACT_RADIUS_MM
+        )
         self._sphere = (to_scene(sphere.vertices), np.asarray(sphere.faces, np.uint32))
 
     def set_object(self, mesh_vertices_mm: np.ndarray, faces: np.ndarray) -> None:

@@ -12,11 +12,13 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 import viser
 
 from app.errors import HandbenchError
 from app.explorer import url_state
 from app.explorer.input_commit import commit_script_html
+from app.explorer.latency_log import mark
 from app.explorer.live_score import DEBOUNCE_S, ScoreWorker, read_snapshot
 from app.explorer.map_data import TOTAL, map_points
 from app.explorer.page_toasts import toast_script_html
@@ -50,6 +52,14 @@ LINK_TIMEOUT_S = 60.0
 """How long a new tab may take to report its link (retried requests, busy browsers)."""
 FLOOR_GAP_MM = 12.0
 """The floor grid sits this far under the lowest point of the object and the hand."""
+SCENE_AFTER_ESTIMATE_S = 0.5
+"""On a page without a GPU, a design change's scene batch waits at most this long (s, from
+the request) for the S_GAS panel's first estimate, when that estimate is computed at once
+(not after a drag's debounce, nor for a stored design) ..."""
+PAGE_PAINT_S = 0.35
+"""... and then this long more (s): the page finishes the frame it may be drawing (up to
+~0.3 s without a GPU, on 2 cores) and paints the estimate before the scene batch arrives,
+which would hold the estimate back by one more such frame."""
 GHOST_HOLD_S = 4.0
 """The previous design's thumb stays as a ghost this long after the last design change."""
 
@@ -80,10 +90,11 @@ class ExplorerContext:
 class Timings:
     """Measured latencies of this tab (seconds)."""
 
-    hand_redraw: list[float] = field(default_factory=list)
-    """Design change: handler start until the new hand poses were sent."""
-    grasp_redraw: list[float] = field(default_factory=list)
-    """Design change: handler start until the re-simulated grasp was sent."""
+    scene_redraw: list[float] = field(default_factory=list)
+    """Design change: handler start until the new hand and its re-simulated grasp were sent
+    (after the S_GAS panel's first estimate, when that is computed at once)."""
+    last_drawn: ThumbDesign | None = None
+    """The design whose hand and grasp were sent last."""
 
 
 def warm_up(ctx: ExplorerContext) -> None:
@@ -132,6 +143,8 @@ class Session:
         self._ghost_timer: threading.Timer | None = None
         self.link_error: str | None = None
         """Why this tab's link was not applied (None: applied, or no link)."""
+        self.webgl_renderer: str | None = None
+        """The page's WebGL renderer, as its probe reported it (None: not reported)."""
 
         self._setup_scene()
         self._setup_gui()
@@ -157,8 +170,10 @@ class Session:
         scene.add_light_ambient("/lights/ambient", intensity=0.9)
         scene.add_light_directional("/lights/key", intensity=2.2, wxyz=(0.88, 0.28, 0.36, 0.0))
         scene.add_light_directional("/lights/fill", intensity=0.8, wxyz=(0.5, -0.5, 0.5, 0.5))
+        # no shadow term: no light casts one, and without it the floor's shader costs a
+        # software-WebGL frame (no GPU) ~40 ms less of 0.15-0.2 s
         self.floor = scene.add_grid(
-            "/floor", width=0.5, height=0.5, cell_size=0.02, section_size=0.1
+            "/floor", width=0.5, height=0.5, cell_size=0.02, section_size=0.1, shadow_opacity=0.0
         )
         self.hand_view = HandView(scene, self.hand)
         self.ghost = HandView(scene, self.hand, "/ghost", prefix="thumb", ghost=True)
@@ -212,6 +227,10 @@ class Session:
         state = url_state.UrlState()
         try:
             search = self._read_probe(timeout_s=LINK_TIMEOUT_S)
+            try:  # written before the link: there by now, unless the page has no WebGL
+                self.webgl_renderer = self._read_probe(url_state.RENDERER_SUFFIX, timeout_s=2.0)
+            except (TimeoutError, RuntimeError):
+                self.webgl_renderer = None
             if search:
                 state = url_state.parse_query(search)
         except (TimeoutError, RuntimeError, HandbenchError) as e:
@@ -228,8 +247,15 @@ class Session:
             self.apply_state(url_state.UrlState())
         self.ready.set()
 
-    def _read_probe(self, timeout_s: float) -> str | None:
-        """Poll this tab's localStorage for the link query the probe writes.
+    @property
+    def software_webgl(self) -> bool:
+        """The page renders WebGL without a GPU (see ``_apply_design``)."""
+        r = self.webgl_renderer
+        return r is not None and url_state.is_software_renderer(r)
+
+    def _read_probe(self, suffix: str = "", timeout_s: float = LINK_TIMEOUT_S) -> str | None:
+        """Poll this tab's localStorage for what the probe writes: the link query (``suffix``
+        '') or the WebGL renderer (``url_state.RENDERER_SUFFIX``).
 
         Many tabs opening at once keep the browser busy (software WebGL) for many seconds:
         one request timing out is retried until ``timeout_s`` has passed in all."""
@@ -237,14 +263,17 @@ class Session:
         while time.monotonic() < t_end and not self._closed:
             left = max(t_end - time.monotonic(), 0.1)
             try:
-                v = self.client.local_storage.get_item(self._probe_key, timeout=min(left, 10.0))
+                v = self.client.local_storage.get_item(
+                    self._probe_key + suffix, timeout=min(left, 10.0)
+                )
             except TimeoutError:
                 continue
             if v is not None:
-                self.client.local_storage.remove_item(self._probe_key)
+                self.client.local_storage.remove_item(self._probe_key + suffix)
                 return v
             time.sleep(0.05)
-        raise TimeoutError(f"the page did not report its link within {timeout_s:g} s")
+        what = "its link" if not suffix else "its WebGL renderer"
+        raise TimeoutError(f"the page did not report {what} within {timeout_s:g} s")
 
     def apply_state(self, s: url_state.UrlState) -> None:
         """Object, design and GH of a link (unset parts keep their values)."""
@@ -290,29 +319,48 @@ class Session:
                 self._apply_design(req)
 
     def _apply_design(self, design: ThumbDesign) -> None:
+        """The score panel first (its header at once; its worker starts the first sample),
+        then the new hand and its grasp in one scene batch; on a page without a GPU, after the
+        first estimate (``SCENE_AFTER_ESTIMATE_S``, ``PAGE_PAINT_S``).
+
+        One batch, not three (the ghost, the re-posed hand, then the grasp): viser's page
+        applies scene messages at its next frame, and GUI messages at once only when no scene
+        message waits, so every scene batch can hold the panel back by a frame. With a GPU a
+        frame takes milliseconds. Without one (software WebGL: SwiftShader, llvmpipe) a frame
+        of this scene takes 0.1–0.3 s of a 2-core machine, which the sample's workers need
+        too, so the scene waits for the estimate there."""
         if self._closed:  # a closed tab computes nothing more (its link may arrive late)
             return
+        mark("apply", f"{design.cmc_deg} {design.mcp_deg}")
         t0 = time.perf_counter()
         self._stop_player()
-        if design != self.design:
-            self._show_ghost()
+        ghost = design != self.design
         self.design = design
         # the score first: its worker cancels the old design's work and starts this one's
-        # (after its debounce) while the hand and the grasp are redrawn
-        self.worker.request(design, self.settings)
-        self.hand = build_hand(design.cmc_deg, design.mcp_deg, cmc_tilt=design.cmc_tilt)
-        self.kit = HandKit(self.hand)
-        T, q = self.hand_view.T_object_palm, self.hand_view.q
-        with self.client.atomic():
-            self.hand_view.set_pose(self.hand, T, q)
-        self.client.flush()
-        t1 = time.perf_counter()
+        # while the hand and the grasp are computed
+        first_estimate = self.worker.request(design, self.settings)
+        t_request = time.monotonic()
         self.map_panel.set_tilt(design.cmc_tilt)
         self.map_panel.set_current(design.cmc_deg, design.mcp_deg)  # the star first: ~1 ms
-        self._show_final()
-        t2 = time.perf_counter()
-        self.timings.hand_redraw.append(t1 - t0)
-        self.timings.grasp_redraw.append(t2 - t0)
+        old_hand, old_T, old_q = self.hand, self.hand_view.T_object_palm, self.hand_view.q
+        self.hand = build_hand(design.cmc_deg, design.mcp_deg, cmc_tilt=design.cmc_tilt)
+        self.kit = HandKit(self.hand)
+        rep, out = self._simulate_selected()
+        # the first estimate before the scene (see above): a scene batch sent first would hold
+        # the estimate back by a frame, and the frame's rendering slows the sample's workers
+        if self.software_webgl and first_estimate.wait(
+            t_request + SCENE_AFTER_ESTIMATE_S - time.monotonic()
+        ):
+            time.sleep(PAGE_PAINT_S)  # the page shows the estimate before the scene arrives
+        with self.client.atomic():
+            if ghost:
+                self._show_ghost(old_hand, old_T, old_q)
+            self._draw_final(rep, out)
+        self.client.flush()
+        t1 = time.perf_counter()
+        mark("scene_sent")
+        self.timings.scene_redraw.append(t1 - t0)
+        self.timings.last_drawn = design
         self._refresh_outcomes()
         self.share_panel.update_link()
 
@@ -381,26 +429,32 @@ class Session:
         """Simulate the selected GH at the current design and draw its final grasp."""
         if self._closed:
             return
-        i = self.gh
-        s = self.settings
-        d = self.design
-        rep = replay(self.kit, self.obj, self.hyps, i, s, base_kit=base_kit(d))
-        out = judge(rep.grasp, self.obj, s, rep.base.queries + rep.grasp.queries)
-        self.last, self.outcome = rep, out
-        g = rep.grasp
+        rep, out = self._simulate_selected()
         with self.client.atomic():
-            self.hand_view.set_pose(self.hand, g.T_object_palm, g.q)
-            self.object_view.set_cone(self.hyps, i)
-            self.object_view.set_palm_point(
-                g.T_object_palm, self.hand.approach_point_palm, self.obj.spec.setup.hand_vector_palm
-            )
-            self._show_contacts(g)
-            self._place_floor(rep)
-            self.replay_panel.stage.content = "final grasp"
-            self.replay_panel.result.content = outcome_markdown(
-                out, self.hyps.ids[i], len(g.contacts)
-            )
+            self._draw_final(rep, out)
         self.client.flush()
+
+    def _simulate_selected(self) -> tuple[Replay, GraspOutcome]:
+        """The selected GH simulated at the current design, and its judged outcome."""
+        s = self.settings
+        rep = replay(self.kit, self.obj, self.hyps, self.gh, s, base_kit=base_kit(self.design))
+        out = judge(rep.grasp, self.obj, s, rep.base.queries + rep.grasp.queries)
+        return rep, out
+
+    def _draw_final(self, rep: Replay, out: GraspOutcome) -> None:
+        """The final grasp of ``rep`` in the scene and the replay panel (inside the caller's
+        ``client.atomic()``)."""
+        self.last, self.outcome = rep, out
+        i, g = self.gh, rep.grasp
+        self.hand_view.set_pose(self.hand, g.T_object_palm, g.q)
+        self.object_view.set_cone(self.hyps, i)
+        self.object_view.set_palm_point(
+            g.T_object_palm, self.hand.approach_point_palm, self.obj.spec.setup.hand_vector_palm
+        )
+        self._show_contacts(g)
+        self._place_floor(rep)
+        self.replay_panel.stage.content = "final grasp"
+        self.replay_panel.result.content = outcome_markdown(out, self.hyps.ids[i], len(g.contacts))
 
     def _show_contacts(self, grasp: Grasp | None) -> None:
         """The grasp's contacts (or none); the object and the links that carry a contact turn
@@ -460,12 +514,13 @@ class Session:
         self._player = None
 
     # ------------------------------------------------------------------ ghost
-    def _show_ghost(self) -> None:
-        """Keep the current thumb as a translucent ghost while the design changes."""
+    def _show_ghost(self, hand: Hand, T_object_palm: np.ndarray, q: np.ndarray) -> None:
+        """Keep the thumb shown before a design change (``hand`` posed by ``T_object_palm``
+        and ``q``) as a translucent ghost while the design changes (inside the caller's
+        ``client.atomic()``)."""
         if not self.ghost.visible:
-            with self.client.atomic():
-                self.ghost.set_pose(self.hand, self.hand_view.T_object_palm, self.hand_view.q)
-                self.ghost.set_visible(True)
+            self.ghost.set_pose(hand, T_object_palm, q)
+            self.ghost.set_visible(True)
         if self._ghost_timer is not None:
             self._ghost_timer.cancel()
         self._ghost_timer = threading.Timer(GHOST_HOLD_S, self._hide_ghost)

@@ -77,7 +77,33 @@ def new_probe_key() -> str:
     return f"handbench-url-{uuid.uuid4().hex}"
 
 
+RENDERER_SUFFIX = "-webgl"
+"""The probe also writes the page's WebGL renderer under its key + this suffix."""
+SOFTWARE_RENDERERS = ("swiftshader", "llvmpipe", "softpipe", "software", "basic render")
+"""Words of a software WebGL renderer's name (no GPU: a frame of the scene costs the CPU
+0.1-0.3 s)."""
+_RENDERER_JS = (
+    "(function () { try { const c = document.createElement('canvas');"
+    " const g = c.getContext('webgl2') || c.getContext('webgl'); if (!g) return 'none';"
+    " const e = g.getExtension('WEBGL_debug_renderer_info');"
+    " const r = String(g.getParameter(e ? e.UNMASKED_RENDERER_WEBGL : g.RENDERER));"
+    " const l = g.getExtension('WEBGL_lose_context'); if (l) l.loseContext(); return r;"
+    " } catch (x) { return 'unknown'; } })()"
+)
+
+
 def probe_html(key: str) -> str:
-    """Hidden HTML that writes this tab's ``location.search`` to localStorage[key]."""
-    js = f"localStorage.setItem('{LOCAL_STORAGE_PREFIX}{key}', window.location.search || '?');"
+    """Hidden HTML that writes this tab's ``location.search`` to localStorage[key] and its
+    WebGL renderer's name to localStorage[key + RENDERER_SUFFIX]."""
+    k = f"{LOCAL_STORAGE_PREFIX}{key}"
+    js = (
+        f"localStorage.setItem('{k}{RENDERER_SUFFIX}', {_RENDERER_JS});"
+        f" localStorage.setItem('{k}', window.location.search || '?');"
+    )
     return f'<img alt="" src="data:image/gif;base64,x" style="display:none" onerror="{js}">'
+
+
+def is_software_renderer(name: str) -> bool:
+    """Whether a WebGL renderer's name is a software rasterizer's."""
+    n = name.lower()
+    return any(w in n for w in SOFTWARE_RENDERERS)

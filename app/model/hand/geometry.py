@@ -15,6 +15,10 @@ import trimesh
 
 #: How much smaller than the collision capsule the visual capsule is (fraction of radius).
 VISUAL_INSET = 0.03
+VISUAL_CAPSULE_COUNT = (16, 12)
+"""Segments of a drawn capsule: around its axis, and over each cap (trimesh's ``count``).
+384 triangles a link: the explorer's browser renders the hand without a GPU in many set-ups
+(software WebGL), where the hand at (24, 24) (1,152 a link) took a fifth of a frame."""
 
 
 @dataclass(frozen=True, eq=False)  # hashed by identity (caches)
@@ -59,7 +63,7 @@ class CapsuleShape:
     def visual_mesh(self, inset: float = VISUAL_INSET) -> trimesh.Trimesh:
         """Capsule mesh a little inside the collision capsule, link frame."""
         m = trimesh.creation.capsule(
-            height=self.length, radius=self.radius * (1 - inset), count=[24, 24]
+            height=self.length, radius=self.radius * (1 - inset), count=list(VISUAL_CAPSULE_COUNT)
         )
         m.apply_transform(self.T_link_fcl())
         return m
