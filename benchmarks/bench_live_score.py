@@ -206,29 +206,19 @@ def watch(
 ) -> Timeline:
     """Poll the panel until the design is complete (or the first estimate, or timeout);
     with the page's ``clock_offset``, also when each step was painted (``Timeline.screen``)."""
-    tl = _poll(page, design, objects, t0, timeout_s, stop_at_first, on_first, trace)
-    if offset is not None:
+
+    def done(tl: Timeline) -> Timeline:
+        if offset is None:
+            return tl
         want = ("first" if stop_at_first else "full") if tl.t_first or tl.t_full else None
         t_end = time.perf_counter() + 3.0
         while True:  # the painted time comes once the frame that painted it is done
             tl.screen = screen_times(page, design, t0, offset)
             got = tl.screen.t_first if want == "first" else tl.screen.t_full
             if want is None or got is not None or time.perf_counter() > t_end:
-                break
+                return tl
             time.sleep(0.1)
-    return tl
 
-
-def _poll(
-    page: Any,
-    design: tuple[float, float],
-    objects: list[str],
-    t0: float,
-    timeout_s: float,
-    stop_at_first: bool,
-    on_first: Any,
-    trace: Any,
-) -> Timeline:
     tl = Timeline()
     want = (design[0], design[1])
     last_state = None
@@ -272,16 +262,16 @@ def _poll(
                 if on_first is not None:
                     on_first()
                 if stop_at_first:
-                    return tl
+                    return done(tl)
             if m.group(3) == "complete":
                 tot = TOTAL.search(text.replace("**", ""))
                 if tot:
                     tl.t_full = t
                     tl.total = tot.group(1)
                     tl.first_text = tl.first_text or text
-                    return tl
+                    return done(tl)
         time.sleep(POLL_S)
-    return tl
+    return done(tl)
 
 
 def store_counts(path: Path) -> dict[str, int]:
