@@ -196,6 +196,8 @@ def test_replay_shows_contacts(server: ExplorerServer, browser: Any) -> None:
     page, s = open_tab(server, browser, "?cmc=15&mcp=60&object=chips_can&gh=17")
     try:
         assert (s.design.cmc_deg, s.design.mcp_deg, s.gh) == (15.0, 60.0, 17)
+        # the link's design was applied once (not once more by the sliders' callback)
+        assert len(s.timings.scene_redraw) == 1 and s.timings.last_drawn == s.design
         page.get_by_role("tab", name="Grasp").click()
         page.get_by_role("button", name="Play replay").click()
         wait_until(lambda: "replay:" in s.replay_panel.stage.content, 10, "the replay to start")

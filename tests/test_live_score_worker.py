@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from app.explorer.latency_log import ENV, mark
-from app.explorer.live_score import FIRST_SAMPLE, ScoreSnapshot, ScoreWorker
+from app.explorer.live_score import FIRST_SAMPLE, FirstEstimate, ScoreSnapshot, ScoreWorker
 from app.model.design import ThumbDesign
 from app.quality.settings import SimSettings
 from app.runs.store import ResultStore
@@ -88,3 +88,34 @@ def test_latency_log_writes_only_when_asked(
     assert [ln.split(" ", 1)[1].strip() for ln in lines] == ["apply 20.0 50.0", "header_shown"]
     stamps = [float(ln.split(" ", 1)[0]) for ln in lines]
     assert t0 - 1 <= stamps[0] <= stamps[1] <= time.time() + 1
+
+
+def _scene_wait(
+    first: FirstEstimate, newer: bool = False, show_after_s: float | None = None
+) -> float:
+    """Seconds ``Session._wait_for_estimate`` waits (the session's state faked)."""
+    import threading
+    from types import SimpleNamespace
+
+    from app.explorer.session import Session
+
+    fake = SimpleNamespace(_newer_design_waiting=lambda: newer)
+    if show_after_s is not None:
+        threading.Timer(show_after_s, first.set_shown).start()
+    t0 = time.monotonic()
+    Session._wait_for_estimate(fake, first, t0)  # type: ignore[arg-type]  # noqa: SLF001
+    return time.monotonic() - t0
+
+
+def test_scene_waits_for_the_estimate_then_the_paint_unless_a_newer_design_waits() -> None:
+    from app.explorer.session import PAGE_PAINT_S, SCENE_AFTER_ESTIMATE_S
+
+    # shown after 0.1 s: the scene follows PAGE_PAINT_S later
+    dt = _scene_wait(FirstEstimate(coming=True), show_after_s=0.1)
+    assert 0.1 + PAGE_PAINT_S - 0.02 <= dt < 0.1 + PAGE_PAINT_S + 0.4
+    # never shown: the scene goes at the cap, without the paint wait
+    dt = _scene_wait(FirstEstimate(coming=True))
+    assert SCENE_AFTER_ESTIMATE_S - 0.02 <= dt < SCENE_AFTER_ESTIMATE_S + 0.4
+    # none coming (stored design, or a drag's debounce), or a newer design waiting: no wait
+    assert _scene_wait(FirstEstimate(coming=False)) < 0.1
+    assert _scene_wait(FirstEstimate(coming=True), newer=True, show_after_s=0.05) < 0.1

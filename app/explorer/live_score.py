@@ -361,6 +361,11 @@ class FirstEstimate:
         """No estimate will come (cancelled, replaced, failed, or one object left)."""
         self._done.set()
 
+    @property
+    def done(self) -> bool:
+        """Shown, or none is coming."""
+        return self._done.is_set()
+
     def wait(self, timeout: float) -> bool:
         """Wait at most ``timeout`` s for the estimate, or for word that none is coming;
         whether it was shown."""

@@ -97,6 +97,12 @@ class DesignPanel:
         self._set_sliders(cmc_deg, mcp_deg)
         self._changed()
 
+    def show_design(self, cmc_deg: float, mcp_deg: float) -> None:
+        """Move both sliders and the published label to a design without calling
+        ``on_design`` (the caller applies the design itself, with its CMC tilt)."""
+        self._set_sliders(cmc_deg, mcp_deg)
+        self._show(cmc_deg, mcp_deg)
+
     def _set_sliders(self, cmc_deg: float, mcp_deg: float) -> None:
         self._muted = True
         try:
@@ -124,10 +130,14 @@ class DesignPanel:
         c, m = d.cmc_deg, d.mcp_deg
         if (c, m) != (self.cmc.value, self.mcp.value):
             self._set_sliders(c, m)
+        self._show(c, m)
+        self._on_design(c, m)
+
+    def _show(self, cmc_deg: float, mcp_deg: float) -> None:
+        """A valid design is shown: no message, the fallback, the published label."""
         self.message.content = ""
-        self.valid = (c, m)
-        label = design_label(d)
+        self.valid = (cmc_deg, mcp_deg)
+        label = design_label(ThumbDesign(cmc_deg, mcp_deg))
         want = label if label in self._published else CUSTOM
         if self.published.value != want:
             self.published.value = want
-        self._on_design(c, m)

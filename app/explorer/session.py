@@ -19,7 +19,7 @@ from app.errors import HandbenchError
 from app.explorer import url_state
 from app.explorer.input_commit import commit_script_html
 from app.explorer.latency_log import mark
-from app.explorer.live_score import DEBOUNCE_S, ScoreWorker, read_snapshot
+from app.explorer.live_score import DEBOUNCE_S, FirstEstimate, ScoreWorker, read_snapshot
 from app.explorer.map_data import TOTAL, map_points
 from app.explorer.page_toasts import toast_script_html
 from app.explorer.panel_design import DesignPanel
@@ -56,10 +56,11 @@ SCENE_AFTER_ESTIMATE_S = 0.5
 """On a page without a GPU, a design change's scene batch waits at most this long (s, from
 the request) for the S_GAS panel's first estimate, when that estimate is computed at once
 (not after a drag's debounce, nor for a stored design) ..."""
-PAGE_PAINT_S = 0.35
-"""... and then this long more (s): the page finishes the frame it may be drawing (up to
-~0.3 s without a GPU, on 2 cores) and paints the estimate before the scene batch arrives,
-which would hold the estimate back by one more such frame."""
+PAGE_PAINT_S = 0.5
+"""... and then this long more (s): the page finishes the frame it may be drawing (viser
+redraws once a second even when idle; without a GPU such a frame takes up to ~0.45 s of a
+2-core machine whose workers are busy) and paints the estimate before the scene batch
+arrives, which would hold the estimate back by one more such frame."""
 GHOST_HOLD_S = 4.0
 """The previous design's thumb stays as a ghost this long after the last design change."""
 
@@ -290,7 +291,10 @@ class Session:
             m = self.design.mcp_deg if s.mcp_deg is None else s.mcp_deg
             tilt = self.design.cmc_tilt if s.tilt is None else s.tilt
             design = ThumbDesign(c, m, tilt)  # type: ignore[arg-type]  # checked by parse_query
-            self.design_panel.set_design(design.cmc_deg, design.mcp_deg)
+            # the sliders follow without their callback: the design is applied once, here,
+            # with the link's tilt (the callback would apply it a second time, computing its
+            # first sample twice)
+            self.design_panel.show_design(design.cmc_deg, design.mcp_deg)
             self._apply_design(design)
             self.frame_camera()
 
@@ -310,12 +314,15 @@ class Session:
                 return
             self._busy = True
         while True:
-            with self._req_lock:
-                req, self._req = self._req, None
-                if req is None or self._closed:
-                    self._busy = False
-                    return
+            # the request is taken once the lock is held: while another handler holds it (the
+            # link's design, or the previous design waiting for its estimate), this one shows
+            # as waiting (``_newer_design_waiting``) and newer values still replace it
             with self.lock:
+                with self._req_lock:
+                    req, self._req = self._req, None
+                    if req is None or self._closed:
+                        self._busy = False
+                        return
                 self._apply_design(req)
 
     def _apply_design(self, design: ThumbDesign) -> None:
@@ -346,12 +353,10 @@ class Session:
         self.hand = build_hand(design.cmc_deg, design.mcp_deg, cmc_tilt=design.cmc_tilt)
         self.kit = HandKit(self.hand)
         rep, out = self._simulate_selected()
-        # the first estimate before the scene (see above): a scene batch sent first would hold
-        # the estimate back by a frame, and the frame's rendering slows the sample's workers
-        if self.software_webgl and first_estimate.wait(
-            t_request + SCENE_AFTER_ESTIMATE_S - time.monotonic()
-        ):
-            time.sleep(PAGE_PAINT_S)  # the page shows the estimate before the scene arrives
+        if self.software_webgl:
+            self._wait_for_estimate(first_estimate, t_request)
+            if self._newer_design_waiting():
+                return  # it draws next; this scene would only hold its panel back by a frame
         with self.client.atomic():
             if ghost:
                 self._show_ghost(old_hand, old_T, old_q)
@@ -363,6 +368,27 @@ class Session:
         self.timings.last_drawn = design
         self._refresh_outcomes()
         self.share_panel.update_link()
+
+    def _wait_for_estimate(self, first: FirstEstimate, t_request: float) -> None:
+        """On a page without a GPU: wait for the first estimate (until ``t_request`` +
+        ``SCENE_AFTER_ESTIMATE_S``), then ``PAGE_PAINT_S`` for the page to paint it, unless a
+        newer design is waiting. A scene batch sent first would hold the estimate back by a
+        frame, and the frame's rendering slows the sample's workers."""
+        deadline = t_request + SCENE_AFTER_ESTIMATE_S
+        while not first.done and not self._newer_design_waiting():
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return
+            first.wait(min(0.05, left))
+        if first.shown:
+            t_end = time.monotonic() + PAGE_PAINT_S
+            while time.monotonic() < t_end and not self._newer_design_waiting():
+                time.sleep(0.02)
+
+    def _newer_design_waiting(self) -> bool:
+        """A slider has sent a design that ``on_design`` will apply next."""
+        with self._req_lock:
+            return self._req is not None
 
     def on_object(self, key: str) -> None:
         """Object dropdown."""
