@@ -23,8 +23,12 @@ Where the workers get the code
 In flight and cancellation
 --------------------------
 At most ``2 ×`` (the cluster's CPUs) tasks are submitted at a time; results are yielded as they
-finish (``ray.wait``). When ``cancel`` is set the pending tasks are cancelled (``ray.cancel``:
-queued ones never start, running ones get a KeyboardInterrupt) and ``run`` returns.
+finish (``ray.wait``). When ``cancel`` is set (or the consumer stops early) ``run`` returns at
+once and submits nothing more; the tasks already submitted finish on the cluster and their
+results are dropped. They are not ``ray.cancel``-ed: a cancel that crosses the task's own
+completion aborts the driver in Ray's task manager ("Check failed: it !=
+submissible_tasks_.end() Tried to complete task that was not pending", Ray 2.60; the race of
+ray-project/ray#54798), which a clean-clone test run hit once.
 A task whose worker process or node dies is resubmitted by Ray (``max_retries``); a task that
 still fails stops the sweep with a ``HandbenchError``, and a rerun computes only what is
 missing from the store.
@@ -205,9 +209,9 @@ class RayExecutor(Executor):
                     task = pending.pop(ref)
                     yield task, self._result(ref, task)
         finally:
-            # cancelled, failed, or the consumer stopped early: drop what is still queued
-            for ref in pending:
-                ray.cancel(ref)
+            # cancelled, failed, or the consumer stopped early: what was submitted finishes and
+            # is dropped (never ray.cancel: see the module docstring)
+            pending.clear()
 
     def _result(self, ref: Any, task: Task) -> Results:
         ray = self._ray
