@@ -56,7 +56,6 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 POLL_S = 0.05
-LATENCY_ENV = "HANDBENCH_LATENCY_LOG"  # app.explorer.latency_log.ENV
 ENTER_WALL: list[float] = []
 """Wall-clock time of every Enter (to align the server's latency trace)."""
 HEADER = re.compile(r"CMC ([\d.]+)°, MCP ([\d.]+)° — ([a-z]+)")
@@ -86,7 +85,7 @@ SCREEN_JS = r"""() => {
     const key = `${m[1]},${m[2]},${m[3]},${est},${total}`;
     if (key === last) return;
     last = key;
-    const e = { key, dom: performance.now(), screen: null, inFrame };
+    const e = { key, screen: null };
     log.push(e);
     // a change made in a frame's animation callbacks (viser applies most messages there) is
     // painted by that frame, one made in any other task by the next frame; a message posted
@@ -112,9 +111,9 @@ SCREEN_JS = r"""() => {
   requestAnimationFrame(tick);
 }"""
 """Installed in the page: every change of the panel's state (design, state word, estimate
-shown, total shown) with the page's time of the change and of the end of the frame that
-painted it. The polls of ``watch`` wait for the page's main thread, which a software-WebGL
-frame holds for 0.1-0.5 s; these times do not."""
+shown, total shown) with the page's time of the end of the frame that painted it. The polls
+of ``watch`` wait for the page's main thread, which a software-WebGL frame holds for
+0.1-0.5 s; these times do not."""
 
 
 def clock_offset(page: Any) -> float:
@@ -310,7 +309,9 @@ class Server:
         self.store = store
         self.trace = trace
         trace.unlink(missing_ok=True)
-        env = {**os.environ, LATENCY_ENV: str(trace)}
+        from app.explorer.latency_log import ENV
+
+        env = {**os.environ, ENV: str(trace)}
         self.proc = subprocess.Popen(
             [str(ROOT / ".venv" / "bin" / "handbench"), "serve", "--port", str(port),
              "--store", str(store)],
@@ -565,7 +566,7 @@ def run_series(a: argparse.Namespace, out: Path, objects: list[str]) -> None:
     try:
         with browser_context(1400, 900, out / "profiles") as ctx:
             cur = (0.0, 52.0)
-            page, warm = open_page(ctx, f"{srv.url}/?cmc=0&mcp={cur[1]:g}", a.timeout)
+            page, _ = open_page(ctx, f"{srv.url}/?cmc=0&mcp={cur[1]:g}", a.timeout)
             offset = clock_offset(page)
             watch(page, cur, objects, time.perf_counter(), a.timeout,
                   stop_at_first=a.series_overlap)  # fmt: skip

@@ -12,7 +12,6 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 import viser
 
 from app.errors import HandbenchError
@@ -228,7 +227,7 @@ class Session:
         state = url_state.UrlState()
         try:
             search = self._read_probe(timeout_s=LINK_TIMEOUT_S)
-            try:  # written before the link: there by now, unless the page has no WebGL
+            try:  # the probe writes it just before the link: there by now
                 self.webgl_renderer = self._read_probe(url_state.RENDERER_SUFFIX, timeout_s=2.0)
             except (TimeoutError, RuntimeError):
                 self.webgl_renderer = None
@@ -334,7 +333,7 @@ class Session:
         applies scene messages at its next frame, and GUI messages at once only when no scene
         message waits, so every scene batch can hold the panel back by a frame. With a GPU a
         frame takes milliseconds. Without one (software WebGL: SwiftShader, llvmpipe) a frame
-        of this scene takes 0.1–0.3 s of a 2-core machine, which the sample's workers need
+        of this scene takes 0.15–0.45 s of a 2-core machine, which the sample's workers need
         too, so the scene waits for the estimate there."""
         if self._closed:  # a closed tab computes nothing more (its link may arrive late)
             return
@@ -349,7 +348,6 @@ class Session:
         t_request = time.monotonic()
         self.map_panel.set_tilt(design.cmc_tilt)
         self.map_panel.set_current(design.cmc_deg, design.mcp_deg)  # the star first: ~1 ms
-        old_hand, old_T, old_q = self.hand, self.hand_view.T_object_palm, self.hand_view.q
         self.hand = build_hand(design.cmc_deg, design.mcp_deg, cmc_tilt=design.cmc_tilt)
         self.kit = HandKit(self.hand)
         rep, out = self._simulate_selected()
@@ -359,7 +357,7 @@ class Session:
                 return  # it draws next; this scene would only hold its panel back by a frame
         with self.client.atomic():
             if ghost:
-                self._show_ghost(old_hand, old_T, old_q)
+                self._show_ghost()  # the hand drawn now, before _draw_final moves it
             self._draw_final(rep, out)
         self.client.flush()
         t1 = time.perf_counter()
@@ -540,12 +538,13 @@ class Session:
         self._player = None
 
     # ------------------------------------------------------------------ ghost
-    def _show_ghost(self, hand: Hand, T_object_palm: np.ndarray, q: np.ndarray) -> None:
-        """Keep the thumb shown before a design change (``hand`` posed by ``T_object_palm``
-        and ``q``) as a translucent ghost while the design changes (inside the caller's
-        ``client.atomic()``)."""
+    def _show_ghost(self) -> None:
+        """Keep the thumb drawn now (``hand_view``'s hand and pose: the last design whose scene
+        was sent, not one skipped for a newer) as a translucent ghost while the design
+        changes (inside the caller's ``client.atomic()``)."""
         if not self.ghost.visible:
-            self.ghost.set_pose(hand, T_object_palm, q)
+            hv = self.hand_view
+            self.ghost.set_pose(hv.hand, hv.T_object_palm, hv.q)
             self.ghost.set_visible(True)
         if self._ghost_timer is not None:
             self._ghost_timer.cancel()

@@ -81,7 +81,7 @@ RENDERER_SUFFIX = "-webgl"
 """The probe also writes the page's WebGL renderer under its key + this suffix."""
 SOFTWARE_RENDERERS = ("swiftshader", "llvmpipe", "softpipe", "software", "basic render")
 """Words of a software WebGL renderer's name (no GPU: a frame of the scene costs the CPU
-0.1-0.3 s)."""
+0.15-0.45 s on 2 cores)."""
 _RENDERER_JS = (
     "(function () { try { const c = document.createElement('canvas');"
     " const g = c.getContext('webgl2') || c.getContext('webgl'); if (!g) return 'none';"

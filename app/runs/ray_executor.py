@@ -197,21 +197,18 @@ class RayExecutor(Executor):
         ray = self._ray
         limit = self.in_flight()
         pending: dict[Any, Task] = {}
-        try:
-            while queue or pending:
-                while queue and len(pending) < limit:
-                    t = queue.pop()
-                    pending[self._remote.remote(t)] = t
-                done, _ = ray.wait(list(pending), num_returns=1, timeout=POLL_S)
-                if cancel is not None and cancel.is_set():
-                    return
-                for ref in done:
-                    task = pending.pop(ref)
-                    yield task, self._result(ref, task)
-        finally:
-            # cancelled, failed, or the consumer stopped early: what was submitted finishes and
-            # is dropped (never ray.cancel: see the module docstring)
-            pending.clear()
+        # cancelled, failed, or the consumer stopped early: what was submitted finishes on the
+        # cluster and is dropped with ``pending`` (never ray.cancel: see the module docstring)
+        while queue or pending:
+            while queue and len(pending) < limit:
+                t = queue.pop()
+                pending[self._remote.remote(t)] = t
+            done, _ = ray.wait(list(pending), num_returns=1, timeout=POLL_S)
+            if cancel is not None and cancel.is_set():
+                return
+            for ref in done:
+                task = pending.pop(ref)
+                yield task, self._result(ref, task)
 
     def _result(self, ref: Any, task: Task) -> Results:
         ray = self._ray
